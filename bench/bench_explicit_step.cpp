@@ -1,0 +1,72 @@
+// Full explicit step without energies: evaluate() (internal forces, accelerations) then
+// update() (velocities, displacements), on an n x n-cell free plate vibrating from a small
+// smooth initial displacement and velocity, dt = 0.5 x model.critical_dt.
+// Reported: time per step, and element_steps_per_second = cells x steps per second
+// [cells/s] (items_per_second counts the same cells).
+#include <string>
+#include <vector>
+
+#include "bench/bench_common.hpp"
+#include "solver/central_difference.hpp"
+
+namespace ricochet::bench {
+namespace {
+
+// Steps between restores of the starting state (done with the timer paused), so a long run
+// never leaves the small-strain regime however many iterations the library picks.
+constexpr long reset_every = 1000;
+
+void explicit_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx) {
+  const Model& model = plate_model(element, material, nx);
+  const std::vector<PrescribedDof> prescribed;
+  const double dt = 0.5 * model.critical_dt;  // [s]
+  const double cells = model.num_cells();
+
+  // Start after step 0 so every timed evaluate() is an ordinary step.
+  State s = initial_state(model, prescribed, dt, plate_field(model, nx, 1e-5));
+  s.v_half = plate_field(model, nx, 1.0);
+  evaluate(model, prescribed, s, /*with_energy=*/false);
+  update(s);
+  const State start = s;
+
+  long since_reset = 0;
+  for (auto _ : state) {
+    if (since_reset == reset_every) {
+      state.PauseTiming();
+      s = start;
+      since_reset = 0;
+      state.ResumeTiming();
+    }
+    evaluate(model, prescribed, s, /*with_energy=*/false);
+    update(s);
+    ++since_reset;
+    benchmark::DoNotOptimize(s.u.data());
+    benchmark::ClobberMemory();
+  }
+
+  if (!s.u.allFinite() || !s.v_half.allFinite() || !(s.forces.min_jacobian > 0.9))
+    fail(state, "state left the small-strain regime");
+  state.SetItemsProcessed(state.iterations() * model.num_cells());
+  state.counters["element_steps_per_second"] =
+      benchmark::Counter(cells, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+const bool registered = [] {
+  struct Case {
+    ElementKind element;
+    MaterialKind material;
+  };
+  for (const Case c : {Case{ElementKind::q4_one_point_viscous, MaterialKind::st_venant_kirchhoff},
+                       Case{ElementKind::q4_full_2x2, MaterialKind::st_venant_kirchhoff}})
+    for (const int nx : {16, 64, 256, 512}) {
+      const std::string name = "explicit_step/" + std::string(element_name(c.element)) + "/" +
+                               std::string(material_name(c.material)) + "/" +
+                               std::to_string(nx) + "x" + std::to_string(nx);
+      benchmark::RegisterBenchmark(name.c_str(), explicit_step, c.element, c.material, nx)
+          ->Unit(benchmark::kMicrosecond);
+    }
+  return true;
+}();
+
+}  // namespace
+}  // namespace ricochet::bench

@@ -1,0 +1,212 @@
+#include <filesystem>
+#include <fstream>
+
+#include "harness/case_spec.hpp"
+#include "harness/toml_reader.hpp"
+
+namespace ricochet {
+namespace {
+
+constexpr long kMaxDivisions = 100'000;
+
+MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::filesystem::path& dir) {
+  MeshSpec m;
+  m.name = name;
+  m.where = t.path();
+  if (t.has("file")) {
+    std::filesystem::path p = t.text("file");
+    if (p.is_relative()) p = dir / p;
+    m.source = GmshFile{p};
+  } else {
+    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate"});
+    if (gen == "rectangle") {
+      RectangleSpec r;
+      r.width = t.number("width", Range::positive());
+      r.height = t.number("height", Range::positive());
+      r.nx = static_cast<int>(t.integer("nx", 1, 1, kMaxDivisions));
+      r.ny = static_cast<int>(t.integer("ny", 1, 1, kMaxDivisions));
+      r.origin = t.vec2("origin", Vec2::Zero());
+      r.triangles = t.choice("cells", "quad", {"quad", "tri"}) == "tri";
+      m.source = r;
+    } else {
+      ArcPlateSpec a;
+      a.width = t.number("width", Range::positive());
+      a.height = t.number("height", Range::positive());
+      a.radius = t.number("radius", Range::positive());
+      if (!(a.radius > 0.5 * a.width))
+        t.fail("radius", "must be > width/2 = " + std::to_string(0.5 * a.width) + " m for the arc to span the plate");
+      a.nx = static_cast<int>(t.integer("nx", 12, 1, kMaxDivisions));
+      a.ny = static_cast<int>(t.integer("ny", 32, 1, kMaxDivisions));
+      a.bias = t.number("bias", 1.0, Range::positive());
+      a.height_is_overall = t.choice("height_is", "side", {"side", "overall"}) == "overall";
+      m.source = a;
+    }
+  }
+  m.scale = t.number("scale", 1.0, Range::positive());
+  m.offset = t.vec2("offset", Vec2::Zero());
+  t.finish();
+  return m;
+}
+
+MaterialSpec read_material(const TableReader& t) {
+  MaterialSpec m;
+  m.model = t.choice("model", "saint_venant_kirchhoff", {"saint_venant_kirchhoff", "neo_hookean"});
+  m.young = t.number("young", Range::positive());
+  m.poisson = t.number("poisson", Range{-1.0, 0.5, true, true});
+  m.density = t.number("density", Range::positive());
+  t.finish();
+  return m;
+}
+
+BodySpec read_body(const TableReader& t, int index, const std::string& default_mesh) {
+  BodySpec b;
+  b.where = t.path();
+  b.name = t.text("name", "body" + std::to_string(index));
+  b.mesh = t.text("mesh", default_mesh);
+  if (b.mesh.empty()) t.fail("mesh", "missing: name a mesh of [meshes] here or set the top-level key 'mesh'");
+  b.element = t.choice("element", "q4", {"q4", "q4_hourglass"});
+  b.thickness = t.number("thickness", 1.0, Range::positive());
+  b.velocity = t.vec2("velocity", Vec2::Zero());
+  const auto mat = t.table("material");
+  if (!mat) t.fail("material", "missing required table [bodies.material]");
+  b.material = read_material(*mat);
+  if (const auto hg = t.table("hourglass")) {
+    b.hourglass.form = hg->choice("form", "viscous", {"viscous", "stiffness"}) == "viscous"
+                           ? HourglassForm::viscous
+                           : HourglassForm::stiffness;
+    b.hourglass.coeff = hg->number("coeff", 0.1, Range::closed(0.0, 1.0));
+    hg->finish();
+  }
+  for (const auto& ns : t.tables("node_sets")) {
+    BoxNodeSet s;
+    s.name = ns.text("name");
+    const std::vector<double> box = ns.numbers("box", Range{});
+    if (box.size() != 4 || !(box[0] <= box[2]) || !(box[1] <= box[3]))
+      ns.fail("box", "expected [xmin, ymin, xmax, ymax] with xmin <= xmax and ymin <= ymax");
+    s.box = Eigen::Vector4d(box[0], box[1], box[2], box[3]);
+    ns.finish();
+    b.node_sets.push_back(s);
+  }
+  t.finish();
+  return b;
+}
+
+BoundarySpec read_boundary(const TableReader& t, const std::string& first_body) {
+  BoundarySpec b;
+  b.where = t.path();
+  b.body = t.text("body", first_body);
+  b.nodes = t.text("nodes");
+  b.kind = t.choice("type", "velocity", {"velocity", "displacement"}) == "velocity"
+               ? PrescribedDof::Kind::velocity
+               : PrescribedDof::Kind::displacement;
+  if (t.has("x")) b.x = t.number("x", Range{});
+  if (t.has("y")) b.y = t.number("y", Range{});
+  t.number("x", 0.0, Range{});  // marks x and y as known keys when absent
+  t.number("y", 0.0, Range{});
+  b.ramp = t.number("ramp", 0.0, Range::non_negative());
+  if (!b.x && !b.y) t.fail("x", "missing: give x, y or both (a prescribed value per direction)");
+  t.finish();
+  return b;
+}
+
+ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
+  ProbeSpec p;
+  p.where = t.path();
+  p.name = t.text("name");
+  for (char c : p.name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
+      t.fail("name", "got \"" + p.name + "\"; allowed: letters, digits and '_' (it names CSV columns)");
+  p.body = t.text("body", first_body);
+  if (t.has("point")) p.point = t.vec2("point");
+  p.node_set = t.text("node_set", "");
+  if (p.point.has_value() == !p.node_set.empty())
+    t.fail("point", "give exactly one of 'point' (nearest node) or 'node_set' (its first node)");
+  t.finish();
+  return p;
+}
+
+}  // namespace
+
+CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
+  if (!std::filesystem::is_regular_file(file)) throw InputError(file + ": cannot open case file");
+  toml::table doc;
+  try {
+    doc = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                     std::string(e.description()));
+  }
+  CaseContext ctx{file, {}};
+  CaseSpec c;
+  c.file = file;
+  c.overrides = overrides;
+  for (const auto& o : overrides) ctx.overridden.insert(apply_override(doc, file, o));
+
+  const TableReader root(doc, "", ctx);
+  c.name = root.text("name", std::filesystem::path(file).stem().string());
+  c.description = root.text("description", "");
+  c.scheme = root.choice("scheme", "explicit", {"explicit"});
+  c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
+                                                                              : PlaneMode::strain;
+  c.gravity = root.vec2("gravity", Vec2::Zero());
+  c.default_mesh = root.text("mesh", "");
+
+  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+  const auto meshes = root.table("meshes");
+  if (!meshes) root.fail("meshes", "missing required table [meshes.NAME]");
+  for (const auto& name : meshes->keys()) {
+    const auto mt = meshes->table(name);
+    c.meshes.emplace(name, read_mesh(*mt, name, dir));
+  }
+  meshes->finish();
+  if (c.meshes.empty()) root.fail("meshes", "define at least one mesh as [meshes.NAME]");
+  if (!c.default_mesh.empty() && !c.meshes.count(c.default_mesh))
+    root.fail("mesh", "no mesh named \"" + c.default_mesh + "\" in [meshes]");
+
+  const auto bodies = root.tables("bodies");
+  if (bodies.empty()) root.fail("bodies", "missing: define at least one [[bodies]]");
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    BodySpec b = read_body(bodies[i], static_cast<int>(i), c.default_mesh);
+    if (!c.meshes.count(b.mesh)) bodies[i].fail("mesh", "no mesh named \"" + b.mesh + "\" in [meshes]");
+    for (const auto& other : c.bodies)
+      if (other.name == b.name) bodies[i].fail("name", "duplicate body name \"" + b.name + "\"");
+    c.bodies.push_back(std::move(b));
+  }
+  const std::string first_body = c.bodies.front().name;
+  for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
+
+  const auto time = root.table("time");
+  if (!time) root.fail("time", "missing required table [time] (at least time.end)");
+  c.end_time = time->number("end", Range::positive());
+  if (time->is_text("dt")) {
+    if (time->text("dt") != "auto") time->fail("dt", "expected a number > 0 or \"auto\"; got \"" + time->text("dt") + "\"");
+  }
+  else if (time->has("dt"))
+    c.dt = time->number("dt", Range::positive());
+  else
+    time->text("dt", "auto");
+  c.dt_safety = time->number("safety", 0.9, Range{0.0, 1.0, true, false});
+  time->finish();
+  if (c.dt && *c.dt > c.end_time) time->fail("dt", "must be <= time.end");
+
+  c.sample_interval = c.end_time / 1000.0;
+  if (const auto out = root.table("output")) {
+    c.sample_interval = out->number("interval", c.sample_interval, Range::non_negative());
+    c.field_times = out->numbers("fields", Range::closed(0.0, c.end_time));
+    for (const auto& p : out->tables("probes")) {
+      c.probes.push_back(read_probe(p, first_body));
+      for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)
+        if (c.probes[k].name == c.probes.back().name) p.fail("name", "duplicate probe name \"" + c.probes.back().name + "\"");
+    }
+    out->finish();
+  }
+  if (const auto dv = root.table("divergence")) {
+    c.energy_growth_limit = dv->number("energy_growth", 2.0, Range{1.0, 1e12, true, false});
+    c.monitor_every = static_cast<int>(dv->integer("check_every", 50, 1, 1'000'000));
+    dv->finish();
+  }
+  root.finish();
+  return c;
+}
+
+}  // namespace ricochet

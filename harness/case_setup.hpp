@@ -1,0 +1,33 @@
+// From a validated case to what the solver runs: meshes built or read, node sets resolved,
+// the model assembled, prescribed DOFs and probes placed, the time step fixed.
+#pragma once
+
+#include <vector>
+
+#include "harness/case_spec.hpp"
+#include "solver/run.hpp"
+
+namespace ricochet {
+
+struct ProbeInfo {
+  std::string name;
+  std::string body;
+  int node = 0;           // global node index
+  Vec2 position;          // reference coordinates of that node [m]
+  double distance = 0.0;  // from the requested point [m]
+};
+
+struct PreparedCase {
+  CaseSpec spec;
+  std::vector<Mesh> meshes;  // per body, after scale and offset, with all node sets
+  Model model;
+  RunSettings settings;
+  bool dt_auto = false;
+  std::vector<ProbeInfo> probes;
+};
+
+// Throws InputError naming the case file and key for anything that cannot be set up
+// (unreadable mesh, unknown node set, degenerate cell, conflicting prescriptions).
+PreparedCase prepare_case(const CaseSpec& spec);
+
+}  // namespace ricochet

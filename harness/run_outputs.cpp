@@ -1,0 +1,187 @@
+#include "harness/run_outputs.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+
+#include "harness/atomic_file.hpp"
+#include "harness/csv_writer.hpp"
+#include "harness/vtu_writer.hpp"
+
+namespace ricochet {
+namespace {
+
+const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
+  const Model& m = pc.model;
+  VtuData d;
+  d.time = f.time;
+  const Eigen::Map<const Eigen::Matrix2Xd> u(f.u.data(), 2, m.num_nodes());
+  const Eigen::Map<const Eigen::Matrix2Xd> v(f.v.data(), 2, m.num_nodes());
+  d.points = m.ref + u;
+  std::vector<int> body(m.num_cells());
+  // Cells in global order: per body its quads, then its triangles (as the model numbers them).
+  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+    const int n0 = m.bodies[b].first_node;
+    for (auto q : pc.meshes[b].quads) {
+      for (int& i : q) i += n0;
+      d.quads.push_back(q);
+    }
+  }
+  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+    const int n0 = m.bodies[b].first_node;
+    for (auto t : pc.meshes[b].tris) {
+      for (int& i : t) i += n0;
+      d.tris.push_back(t);
+    }
+  }
+  // VTU order is all quads then all triangles; map the per-cell values to it.
+  std::vector<double> vm;
+  std::vector<int> body_id;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+      const int c0 = m.bodies[b].first_cell;
+      const int nq = static_cast<int>(pc.meshes[b].quads.size());
+      const int begin = pass == 0 ? c0 : c0 + nq;
+      const int end = pass == 0 ? c0 + nq : c0 + m.bodies[b].num_cells;
+      for (int c = begin; c < end; ++c) {
+        vm.push_back(f.von_mises[c]);
+        body_id.push_back(static_cast<int>(b));
+      }
+    }
+  d.point_vectors = {{"displacement", Eigen::Matrix2Xd(u)}, {"velocity", Eigen::Matrix2Xd(v)}};
+  d.cell_scalars = {{"von_mises", vm}};
+  d.cell_ints = {{"body", body_id}};
+  return format_vtu(d);
+}
+
+}  // namespace
+
+Json run_summary(const PreparedCase& pc, const RunResult& r) {
+  const CaseSpec& c = pc.spec;
+  Json j = Json::object();
+  j["ricochet_version"] = RICOCHET_VERSION;
+  j["case"] = c.name;
+  j["case_file"] = c.file;
+  Json overrides = Json::array();
+  for (const auto& o : c.overrides) overrides.push_back(o);
+  j["overrides"] = overrides;
+  j["scheme"] = c.scheme;
+  std::string mesh, element;
+  for (const auto& b : c.bodies) {
+    mesh += (mesh.empty() ? "" : "+") + b.mesh;
+    element += (element.empty() ? "" : "+") + b.element;
+  }
+  j["mesh"] = mesh;
+  j["element"] = element;
+  j["plane"] = plane_name(c.plane);
+  j["friction_coeff"] = nullptr;
+  j["nodes"] = pc.model.num_nodes();
+  j["elements"] = pc.model.num_cells();
+  j["dt"] = r.dt;
+  j["dt_mode"] = pc.dt_auto ? "auto" : "fixed";
+  j["dt_safety"] = pc.dt_auto ? Json(c.dt_safety) : Json();
+  j["critical_dt"] = pc.model.critical_dt;
+  j["end_time"] = c.end_time;
+  j["time_reached"] = r.end_time;
+  j["steps"] = r.steps;
+  j["planned_steps"] = r.planned_steps;
+  j["status"] = r.status == RunStatus::ok ? "ok" : "diverged";
+  if (r.status == RunStatus::diverged) {
+    Json d = Json::object();
+    d["reason"] = r.reason;
+    d["step"] = r.diverged_step;
+    d["time"] = r.diverged_time;
+    j["diverged"] = d;
+  } else {
+    j["diverged"] = nullptr;
+  }
+  j["wall_seconds"] = r.wall_seconds;
+  j["cpu_seconds"] = r.cpu_seconds;
+  j["element_steps_per_second"] = r.element_steps_per_second;
+  j["initial_energy"] = r.initial_energy;
+  j["energy_error_max"] = r.energy_error_max;
+  j["penetration_max"] = 0.0;
+  j["von_mises_max"] = r.von_mises_max;
+  j["von_mises_max_time"] = r.von_mises_max_time;
+  Json ci = Json::object();
+  ci["mean"] = 0.0;
+  ci["max"] = 0;
+  j["contact_iterations"] = ci;
+  const History& h = r.history;
+  if (h.rows() > 0) {
+    Json fin = Json::object();
+    const std::size_t last = h.rows() - 1;
+    for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
+                          "external_work", "total_energy", "energy_error", "momentum_x", "momentum_y"})
+      fin[k] = h.at(last, h.column(k));
+    j["final"] = fin;
+  }
+  Json probes = Json::array();
+  for (const auto& p : pc.probes) {
+    Json q = Json::object();
+    q["name"] = p.name;
+    q["body"] = p.body;
+    q["node"] = p.node;
+    q["x"] = p.position.x();
+    q["y"] = p.position.y();
+    q["distance"] = p.distance;
+    probes.push_back(q);
+  }
+  j["probes"] = probes;
+  j["history_rows"] = static_cast<long>(h.rows());
+  j["field_files"] = static_cast<long>(r.fields.size());
+  Json build = Json::object();
+  build["compiler"] = __VERSION__;
+#ifdef NDEBUG
+  build["build_type"] = "release";
+#else
+  build["build_type"] = "debug";
+#endif
+  j["build"] = build;
+  j["written_at"] = utc_now();
+  return j;
+}
+
+void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r) {
+  std::filesystem::create_directories(dir);
+  // Stale results of an earlier run in the same folder must not describe this one.
+  std::filesystem::remove(dir / "summary.json");
+  std::filesystem::remove_all(dir / "fields");
+  write_file_atomic(dir / "history.csv", format_csv(r.history.columns, r.history.values));
+  if (!r.fields.empty()) {
+    std::vector<std::pair<double, std::string>> series;
+    for (const auto& f : r.fields) {
+      char name[64];
+      std::snprintf(name, sizeof name, "_%08ld.vtu", f.step);
+      const std::string file = pc.spec.name + name;
+      write_file_atomic(dir / "fields" / file, format_vtu_snapshot(pc, f));
+      series.emplace_back(f.time, file);
+    }
+    write_file_atomic(dir / "fields" / "fields.pvd", format_pvd(series));
+  }
+  write_file_atomic(dir / "summary.json", run_summary(pc, r).dump());
+}
+
+std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s: %s  t=%.4g s  %ld steps of %.4g s  %d cells  %.3g s wall  %.3g element-steps/s"
+                "  energy_error_max=%.3g  von_mises_max=%.4g Pa",
+                pc.spec.name.c_str(), r.status == RunStatus::ok ? "ok" : "DIVERGED", r.end_time,
+                r.steps, r.dt, pc.model.num_cells(), r.wall_seconds, r.element_steps_per_second,
+                r.energy_error_max, r.von_mises_max);
+  std::string s = buf;
+  if (r.status == RunStatus::diverged) s += "  (" + r.reason + ")";
+  return s + "  -> " + dir;
+}
+
+}  // namespace ricochet

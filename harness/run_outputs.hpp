@@ -1,0 +1,18 @@
+// What a run writes (docs/outputs.md): DIR/summary.json, DIR/history.csv and, when field
+// times are asked for, DIR/fields/<case>_<step>.vtu with DIR/fields/fields.pvd. Each file is
+// written atomically; summary.json is written last, so its presence marks a finished run.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "harness/case_setup.hpp"
+#include "harness/json_writer.hpp"
+
+namespace ricochet {
+
+Json run_summary(const PreparedCase& pc, const RunResult& r);
+void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r);
+std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir);
+
+}  // namespace ricochet

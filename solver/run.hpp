@@ -1,0 +1,77 @@
+// A whole run of the explicit scheme: the time loop, the observers sampled on it, divergence
+// detection, and what the run produced. Typed structs in, typed results out: no files here.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solver/central_difference.hpp"
+
+namespace ricochet {
+
+struct Probe {
+  std::string name;
+  int node = 0;  // global node index
+};
+
+struct RunSettings {
+  double dt = 0.0;                  // fixed time step [s]
+  double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps
+  double sample_interval = 0.0;     // history sampling [s]; <= 0 samples every step
+  std::vector<double> field_times;  // field snapshots at the steps nearest these times [s]
+  std::vector<Probe> probes;
+  std::vector<PrescribedDof> prescribed;
+  double energy_growth_limit = 2.0;  // diverged when total energy > limit * reference energy [-]
+  int monitor_every = 50;            // divergence checks at least every this many steps
+  Eigen::VectorXd initial_displacement;  // optional, 2n [m]
+};
+
+enum class RunStatus { ok, diverged };
+
+// History columns, in order; then per probe <name>_ux, _uy, _vx, _vy.
+std::vector<std::string> history_columns(const std::vector<Probe>& probes);
+
+struct History {
+  std::vector<std::string> columns;
+  std::vector<double> values;  // row-major, columns.size() per row
+  std::size_t rows() const { return columns.empty() ? 0 : values.size() / columns.size(); }
+  double at(std::size_t row, std::size_t col) const { return values[row * columns.size() + col]; }
+  std::size_t column(const std::string& name) const;  // throws std::out_of_range
+};
+
+struct FieldSnapshot {
+  long step = 0;
+  double time = 0.0;               // [s]
+  Eigen::VectorXd u;               // 2n [m]
+  Eigen::VectorXd v;               // 2n, v_n [m/s]
+  std::vector<double> von_mises;   // per cell [Pa]
+};
+
+struct RunResult {
+  RunStatus status = RunStatus::ok;
+  std::string reason;              // why a run diverged
+  long diverged_step = -1;
+  double diverged_time = 0.0;      // [s]
+  double dt = 0.0;                 // [s]
+  long steps = 0;                  // steps taken
+  long planned_steps = 0;
+  double end_time = 0.0;           // time reached [s]
+  History history;
+  std::vector<FieldSnapshot> fields;
+  double initial_energy = 0.0;     // E_0 [J]
+  double energy_error_max = 0.0;   // over samples [-]
+  double von_mises_max = 0.0;      // over samples and cells [Pa]
+  double von_mises_max_time = 0.0; // [s]
+  double wall_seconds = 0.0;       // time loop only
+  double cpu_seconds = 0.0;        // time loop only, process CPU time
+  double element_steps_per_second = 0.0;
+};
+
+// Called at monitor steps so a long run can show progress; must not modify anything.
+using ProgressFn = std::function<void(long step, long planned_steps, double time)>;
+
+RunResult run_explicit(const Model& model, const RunSettings& settings,
+                       const ProgressFn& progress = {});
+
+}  // namespace ricochet

@@ -1,0 +1,16 @@
+// Basic fixed-size types shared by the solver core.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/LU>  // determinant() and inverse() of fixed-size matrices
+
+namespace ricochet {
+
+using Vec2 = Eigen::Vector2d;
+using Mat2 = Eigen::Matrix2d;
+
+// In-plane assumption of a 2D model. Plane stress uses each body's thickness; plane strain
+// uses it too (a slab of that depth), so energies and forces are per body, never per metre.
+enum class PlaneMode { stress, strain };
+
+}  // namespace ricochet

@@ -1,0 +1,225 @@
+// The explicit step performs no heap allocation (design 4): after initial_state, any number of
+// evaluate() + update() calls, with or without energies, with prescribed DOFs, gravity and
+// every element formulation, must not allocate.
+//
+// Every allocation entry point of this executable is counted in one global atomic counter:
+// all replaceable global operator new / delete overloads, and also the C allocation functions
+// (malloc, calloc, realloc, aligned_alloc, posix_memalign, memalign), because Eigen allocates
+// dynamic matrices and temporaries with std::malloc, not operator new. The C functions are
+// interposed the way glibc documents ("Replacing malloc"), forwarding to its __libc_* entry
+// points, so every block still comes from and returns to the one glibc heap.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "solver/central_difference.hpp"
+#include "solver/observers.hpp"
+#include "verification_meshes.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* ptr, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+void __libc_free(void* ptr);
+}
+
+namespace {
+
+std::atomic<long> g_allocations{0};
+
+void* counted_alloc(std::size_t size, std::size_t alignment) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (size == 0) size = 1;
+  return alignment <= alignof(std::max_align_t) ? __libc_malloc(size)
+                                                : __libc_memalign(alignment, size);
+}
+
+void* new_or_throw(std::size_t size, std::size_t alignment) {
+  void* p = counted_alloc(size, alignment);
+  if (p == nullptr) throw std::bad_alloc();
+  return p;
+}
+
+}  // namespace
+
+extern "C" {
+void* malloc(std::size_t size) { return counted_alloc(size, 0); }
+void* calloc(std::size_t count, std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_calloc(count, size);
+}
+void* realloc(void* ptr, std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_realloc(ptr, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_memalign(alignment, size);
+}
+void* memalign(std::size_t alignment, std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  void* p = __libc_memalign(alignment, size);
+  if (p == nullptr) return ENOMEM;
+  *out = p;
+  return 0;
+}
+void free(void* ptr) { __libc_free(ptr); }
+}
+
+void* operator new(std::size_t size) { return new_or_throw(size, 0); }
+void* operator new[](std::size_t size) { return new_or_throw(size, 0); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, 0);
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, 0);
+}
+void* operator new(std::size_t size, std::align_val_t al) {
+  return new_or_throw(size, static_cast<std::size_t>(al));
+}
+void* operator new[](std::size_t size, std::align_val_t al) {
+  return new_or_throw(size, static_cast<std::size_t>(al));
+}
+void* operator new(std::size_t size, std::align_val_t al, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, static_cast<std::size_t>(al));
+}
+void* operator new[](std::size_t size, std::align_val_t al, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, static_cast<std::size_t>(al));
+}
+void operator delete(void* p) noexcept { __libc_free(p); }
+void operator delete[](void* p) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { __libc_free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { __libc_free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  __libc_free(p);
+}
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  __libc_free(p);
+}
+
+namespace ricochet {
+namespace {
+
+using verification::element_name;
+using verification::ElementKind;
+
+// Keeps the optimiser from removing an allocation whose result is otherwise unused.
+template <class T>
+void escape(T* p) {
+  asm volatile("" : : "g"(p) : "memory");
+}
+
+TEST(NoAllocation, CounterSeesEveryKindOfAllocation) {
+  // The counter itself must work, or a zero below would prove nothing.
+  long before = g_allocations.load();
+  int* a = new int(3);
+  escape(a);
+  delete a;
+  EXPECT_GE(g_allocations.load() - before, 1) << "operator new";
+
+  before = g_allocations.load();
+  std::vector<double> v(100, 1.0);
+  escape(v.data());
+  EXPECT_GE(g_allocations.load() - before, 1) << "std::vector";
+
+  before = g_allocations.load();
+  struct alignas(128) Wide {
+    double x[16];
+  };
+  Wide* w = new Wide();
+  escape(w);
+  delete w;
+  EXPECT_GE(g_allocations.load() - before, 1) << "aligned operator new";
+
+  before = g_allocations.load();
+  Eigen::VectorXd x = Eigen::VectorXd::Ones(100);
+  Eigen::VectorXd y = x + x;  // a fresh dynamic vector: Eigen allocates with std::malloc
+  escape(y.data());
+  EXPECT_GE(g_allocations.load() - before, 2) << "Eigen dynamic storage";
+}
+
+struct StepCase {
+  ElementKind kind;
+  Material material;
+  PlaneMode plane;
+};
+
+TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
+  const double young = 200e9, nu = 0.3, rho = 7800.0;
+  std::vector<StepCase> cases;
+  for (ElementKind kind : verification::all_element_kinds()) {
+    cases.push_back({kind, StVenantKirchhoff::make(young, nu, rho, PlaneMode::strain),
+                     PlaneMode::strain});
+    cases.push_back(
+        {kind, NeoHookean::make(young, nu, rho, PlaneMode::stress), PlaneMode::stress});
+  }
+  for (const StepCase& c : cases) {
+    const Mesh mesh = verification::grid_mesh(2.0, 0.5, 8, 2, 0.2, c.kind);
+    Model model = verification::single_body_model(mesh, c.material, c.plane, c.kind, 0.01, 0.1,
+                                                  Vec2(0.0, -9.81));
+    for (int i = 0; i < model.num_nodes(); ++i)
+      model.initial_velocity[2 * i + 1] = std::sin(3.0 * model.ref(0, i));
+    // Prescribed DOFs of every kind: held, pulled at constant velocity, displacement ramp.
+    std::vector<PrescribedDof> prescribed;
+    for (int n : mesh.node_sets.at("left")) {
+      prescribed.push_back({2 * n, PrescribedDof::Kind::velocity, 0.0, 0.0});
+      prescribed.push_back({2 * n + 1, PrescribedDof::Kind::velocity, 0.0, 0.0});
+    }
+    for (int n : mesh.node_sets.at("right"))
+      prescribed.push_back({2 * n, PrescribedDof::Kind::displacement, 1e-4, 1e-4});
+    prescribed.push_back({2 * mesh.node_sets.at("top").front() + 1,
+                          PrescribedDof::Kind::velocity, 0.5, 0.0});
+
+    for (bool with_prescribed : {false, true}) {
+      const std::vector<PrescribedDof> none;
+      const std::vector<PrescribedDof>& p = with_prescribed ? prescribed : none;
+      State s = initial_state(model, p, 0.9 * model.critical_dt);
+      const Eigen::VectorXd u0 = s.u;
+      std::vector<double> cell_vm(model.num_cells());
+      double sink = 0.0;
+
+      const long before = g_allocations.load();
+      for (int n = 0; n < 60; ++n) {
+        evaluate(model, p, s, n % 3 != 0);
+        update(s);
+      }
+      const long steps_allocs = g_allocations.load() - before;
+      EXPECT_EQ(steps_allocs, 0) << element_name(c.kind) << (with_prescribed ? " prescribed" : "");
+
+      // The observers sampled between steps do not allocate either.
+      const long before_obs = g_allocations.load();
+      for (int n = 0; n < 10; ++n) {
+        evaluate(model, p, s, true);
+        const Energies e = observe_energies(model, s, u0);
+        sink += energy_error(e, 1.0, 1.0) + linear_momentum(model, s).norm();
+        cell_von_mises(model, s.u.data(), cell_vm.data());
+        update(s);
+      }
+      EXPECT_EQ(g_allocations.load() - before_obs, 0)
+          << element_name(c.kind) << (with_prescribed ? " prescribed" : "") << " observers";
+      // The steps did something: the body moved and the results are finite.
+      EXPECT_TRUE(std::isfinite(sink));
+      EXPECT_GT(s.u.norm(), 0.0);
+      EXPECT_EQ(s.step, 70);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ricochet

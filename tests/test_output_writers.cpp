@@ -1,0 +1,426 @@
+// The output layer: JSON, CSV, VTU/PVD text and the atomic file writer.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "harness/atomic_file.hpp"
+#include "harness/csv_writer.hpp"
+#include "harness/json_writer.hpp"
+#include "harness/vtu_writer.hpp"
+
+namespace ricochet {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf_value = std::numeric_limits<double>::infinity();
+
+// Doubles whose shortest text is easy to get wrong: subnormal minimum, largest finite, -0.
+const std::vector<double> awkward = {0.1,        1e-300,   5e-324, 1.7976931348623157e308,
+                                     -0.0,       1.0 / 3.0, 2.2250738585072014e-308,
+                                     123456789012345680.0, -1e22, 9007199254740993.0};
+
+void expect_same_bits(const std::string& text, double expected) {
+  char* end = nullptr;
+  const double parsed = std::strtod(text.c_str(), &end);
+  EXPECT_EQ(*end, '\0') << "trailing characters in '" << text << "'";
+  EXPECT_EQ(std::bit_cast<std::uint64_t>(parsed), std::bit_cast<std::uint64_t>(expected))
+      << "'" << text << "' does not round-trip";
+}
+
+// ---------------------------------------------------------------- JSON
+
+TEST(JsonWriter, ExactOutputForSmallDocument) {
+  Json doc = Json::object();
+  doc["name"] = "first";
+  doc["steps"] = 1200;
+  doc["dt"] = 1e-7;
+  doc["ok"] = true;
+  doc["missing"] = nullptr;
+  doc["energy"]["kinetic"] = 0.5;  // a null member becomes an object
+  doc["energy"]["internal"] = nan_value;
+  doc["list"].push_back(1);  // ... or an array
+  doc["list"].push_back(-2.5);
+  doc["list"].push_back(Json::object());
+  doc["list"].push_back(Json::array()).push_back(false);  // returns the new element
+  doc["extremes"].push_back(std::numeric_limits<std::int64_t>::min());
+  doc["extremes"].push_back(std::numeric_limits<std::int64_t>::max());
+  doc["extremes"].push_back(-inf_value);
+  doc["name"] = "taylor_bar";  // assigning an existing key keeps its place
+  EXPECT_EQ(doc.size(), 8u);
+  EXPECT_EQ(doc.dump(),
+            "{\n"
+            "  \"name\": \"taylor_bar\",\n"
+            "  \"steps\": 1200,\n"
+            "  \"dt\": 1e-07,\n"
+            "  \"ok\": true,\n"
+            "  \"missing\": null,\n"
+            "  \"energy\": {\n"
+            "    \"kinetic\": 0.5,\n"
+            "    \"internal\": null\n"
+            "  },\n"
+            "  \"list\": [\n"
+            "    1,\n"
+            "    -2.5,\n"
+            "    {},\n"
+            "    [\n"
+            "      false\n"
+            "    ]\n"
+            "  ],\n"
+            "  \"extremes\": [\n"
+            "    -9223372036854775808,\n"
+            "    9223372036854775807,\n"
+            "    null\n"
+            "  ]\n"
+            "}\n");
+  EXPECT_EQ(Json::object().dump(), "{}\n");
+  EXPECT_EQ(Json::array().dump(), "[]\n");
+  EXPECT_EQ(Json().dump(), "null\n");
+}
+
+TEST(JsonWriter, EscapesStringsAndKeys) {
+  const std::string nasty = std::string("q\"b\\s/\n\t\x01\x1f", 10) + std::string(1, '\0') + "é";
+  EXPECT_EQ(Json(nasty).dump(), "\"q\\\"b\\\\s/\\u000a\\u0009\\u0001\\u001f\\u0000é\"\n");
+  Json doc;
+  doc["a\"b"] = "x";
+  EXPECT_EQ(doc.dump(), "{\n  \"a\\\"b\": \"x\"\n}\n");
+}
+
+TEST(JsonWriter, NestingMisuseThrows) {
+  Json number = 3;
+  EXPECT_THROW(number["key"], std::logic_error);
+  EXPECT_THROW(number.push_back(1), std::logic_error);
+  Json array = Json::array();
+  EXPECT_THROW(array["key"], std::logic_error);
+  Json object = Json::object();
+  EXPECT_THROW(object.push_back(1), std::logic_error);
+  EXPECT_THROW(Json(std::uint64_t{1} << 63), std::out_of_range);
+  EXPECT_NO_THROW(Json(std::uint64_t{1} << 62));
+}
+
+TEST(JsonWriter, DoublesRoundTripBitForBit) {
+  for (const double value : awkward) {
+    std::string text = Json(value).dump();
+    ASSERT_EQ(text.back(), '\n');
+    text.pop_back();
+    expect_same_bits(text, value);
+  }
+  EXPECT_EQ(Json(-0.0).dump(), "-0\n");
+  EXPECT_EQ(Json(5e-324).dump(), "5e-324\n");
+  EXPECT_EQ(Json(1.7976931348623157e308).dump(), "1.7976931348623157e+308\n");
+}
+
+// ---------------------------------------------------------------- CSV
+
+TEST(CsvWriter, HeaderAndRows) {
+  const std::vector<std::string> columns = {"t", "x,y", "say \"hi\""};
+  const std::vector<double> rows = {0, 0.1, -0.0, 1e-300, -nan_value, -inf_value, inf_value, 2.5,
+                                    5e-324};
+  EXPECT_EQ(format_csv(columns, rows),
+            "t,\"x,y\",\"say \"\"hi\"\"\"\n"
+            "0,0.1,-0\n"
+            "1e-300,nan,-inf\n"
+            "inf,2.5,5e-324\n");
+  EXPECT_EQ(format_csv({"only"}, {}), "only\n");
+}
+
+TEST(CsvWriter, NumbersRoundTrip) {
+  std::istringstream lines(format_csv({"v"}, awkward));
+  std::string line;
+  std::getline(lines, line);
+  for (const double value : awkward) {
+    ASSERT_TRUE(std::getline(lines, line));
+    expect_same_bits(line, value);
+  }
+}
+
+TEST(CsvWriter, SizeCheck) {
+  EXPECT_THROW(format_csv({"a", "b"}, {1, 2, 3}), std::invalid_argument);
+  EXPECT_THROW(format_csv({}, {}), std::invalid_argument);
+  EXPECT_NO_THROW(format_csv({"a", "b"}, {1, 2, 3, 4}));
+}
+
+TEST(CsvWriter, FieldQuoting) {
+  EXPECT_EQ(csv_field("plain text"), "plain text");
+  EXPECT_EQ(csv_field(""), "");
+  EXPECT_EQ(csv_field("a,b"), "\"a,b\"");
+  EXPECT_EQ(csv_field("a\"b"), "\"a\"\"b\"");
+  EXPECT_EQ(csv_field("two\nlines"), "\"two\nlines\"");
+  EXPECT_EQ(csv_field("cr\r"), "\"cr\r\"");
+}
+
+// ---------------------------------------------------------------- VTU / PVD
+
+// "" if `xml` is well-formed as far as these writers need: one root element, every element
+// closed in order, attribute values double-quoted, and every '&' one of the five XML entities.
+std::string xml_error(const std::string& xml) {
+  static const std::regex entity("^&(amp|lt|gt|quot|apos);");
+  static const std::regex tag(
+      R"(^<([A-Za-z_][\w.-]*)((?:\s+[A-Za-z_][\w.-]*="[^"<]*")*)\s*(/?)>$)");
+  for (std::size_t i = xml.find('&'); i != std::string::npos; i = xml.find('&', i + 1)) {
+    if (!std::regex_search(xml.substr(i, 6), entity)) return "bare & at " + std::to_string(i);
+  }
+  if (xml.rfind("<?xml version=\"1.0\"?>\n", 0) != 0) return "no XML declaration";
+  std::vector<std::string> open;
+  int roots = 0;
+  for (std::size_t i = xml.find('>') + 1; i < xml.size();) {
+    const std::size_t lt = xml.find('<', i);
+    if (lt == std::string::npos) break;
+    const std::size_t gt = xml.find('>', lt);
+    if (gt == std::string::npos) return "unterminated tag";
+    const std::string text = xml.substr(lt, gt - lt + 1);
+    i = gt + 1;
+    std::smatch m;
+    if (text.rfind("</", 0) == 0) {
+      const std::string name = text.substr(2, text.size() - 3);
+      if (open.empty() || open.back() != name) return "unexpected " + text;
+      open.pop_back();
+    } else if (std::regex_match(text, m, tag)) {
+      if (open.empty()) ++roots;
+      if (m[3].length() == 0) open.push_back(m[1]);
+    } else {
+      return "malformed tag " + text;
+    }
+  }
+  if (!open.empty()) return "unclosed <" + open.back() + ">";
+  return roots == 1 ? "" : "expected one root element";
+}
+
+// The whitespace-separated values of the DataArray whose Name is `name`.
+std::vector<std::string> array_values(const std::string& xml, const std::string& name) {
+  const std::size_t at = xml.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return {"<missing>"};
+  const std::size_t begin = xml.find('>', at) + 1;
+  std::istringstream values(xml.substr(begin, xml.find("</DataArray>", begin) - begin));
+  std::vector<std::string> out;
+  for (std::string value; values >> value;) out.push_back(value);
+  return out;
+}
+
+VtuData mixed_mesh() {
+  VtuData data;
+  data.points.resize(2, 5);
+  data.points << 0, 1, 1, 0, 2,  //
+      0, 0, 1, 1, 0.5;
+  data.quads = {{0, 1, 2, 3}};
+  data.tris = {{1, 4, 2}};
+  data.time = 0.25;
+  Eigen::Matrix2Xd velocity(2, 5);
+  velocity << 1, 2, 3, 4, 5,  //
+      -1, -2, -3, -4, -5;
+  data.point_vectors = {{"velocity", velocity}};
+  data.point_scalars = {{"temperature", {300, 301, 302, 303, 304}}};
+  data.cell_scalars = {{"pressure", {1.5, -2}}};
+  data.cell_ints = {{"body", {0, 1}}};
+  return data;
+}
+
+using Tokens = std::vector<std::string>;
+
+TEST(VtuWriter, MixedMeshStructure) {
+  const std::string xml = format_vtu(mixed_mesh());
+  EXPECT_EQ(xml_error(xml), "");
+  EXPECT_NE(xml.find("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\""), std::string::npos);
+  EXPECT_NE(xml.find("<Piece NumberOfPoints=\"5\" NumberOfCells=\"2\">"), std::string::npos);
+  // FieldData belongs to the grid, not the piece (meshio rejects it inside <Piece>).
+  EXPECT_LT(xml.find("<FieldData>"), xml.find("<Piece "));
+  EXPECT_NE(xml.find("type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\""),
+            std::string::npos);
+  EXPECT_EQ(array_values(xml, "TimeValue"), Tokens{"0.25"});
+  EXPECT_EQ(array_values(xml, "connectivity"), (Tokens{"0", "1", "2", "3", "1", "4", "2"}));
+  EXPECT_EQ(array_values(xml, "offsets"), (Tokens{"4", "7"}));
+  EXPECT_EQ(array_values(xml, "types"), (Tokens{"9", "5"}));
+  EXPECT_NE(xml.find("<DataArray type=\"UInt8\" Name=\"types\""), std::string::npos);
+  EXPECT_EQ(array_values(xml, "Points"),
+            (Tokens{"0", "0", "0", "1", "0", "0", "1", "1", "0", "0", "1", "0", "2", "0.5", "0"}));
+  EXPECT_NE(xml.find("Name=\"velocity\" NumberOfComponents=\"3\""), std::string::npos);
+  EXPECT_EQ(array_values(xml, "velocity"), (Tokens{"1", "-1", "0", "2", "-2", "0", "3", "-3", "0",
+                                                   "4", "-4", "0", "5", "-5", "0"}));
+  EXPECT_EQ(array_values(xml, "temperature"), (Tokens{"300", "301", "302", "303", "304"}));
+  EXPECT_EQ(array_values(xml, "pressure"), (Tokens{"1.5", "-2"}));
+  EXPECT_EQ(array_values(xml, "body"), (Tokens{"0", "1"}));
+  EXPECT_NE(xml.find("<DataArray type=\"Int32\" Name=\"body\""), std::string::npos);
+  EXPECT_LT(xml.find("<PointData>"), xml.find("<CellData>"));
+  EXPECT_LT(xml.find("<CellData>"), xml.find("<Points>"));
+  EXPECT_LT(xml.find("<Points>"), xml.find("<Cells>"));
+}
+
+TEST(VtuWriter, ExactOutputForOneTriangle) {
+  VtuData data;
+  data.points.resize(2, 3);
+  data.points << 0, 1, 0,  //
+      0, 0, 0.1;
+  data.tris = {{0, 1, 2}};
+  EXPECT_EQ(format_vtu(data),
+            "<?xml version=\"1.0\"?>\n"
+            "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+            "  <UnstructuredGrid>\n"
+            "    <FieldData>\n"
+            "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+            "format=\"ascii\">\n"
+            "0\n"
+            "      </DataArray>\n"
+            "    </FieldData>\n"
+            "    <Piece NumberOfPoints=\"3\" NumberOfCells=\"1\">\n"
+            "      <PointData>\n"
+            "      </PointData>\n"
+            "      <CellData>\n"
+            "      </CellData>\n"
+            "      <Points>\n"
+            "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
+            "format=\"ascii\">\n"
+            "0 0 0\n1 0 0\n0 0.1 0\n"
+            "        </DataArray>\n"
+            "      </Points>\n"
+            "      <Cells>\n"
+            "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n"
+            "0 1 2\n"
+            "        </DataArray>\n"
+            "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n"
+            "3\n"
+            "        </DataArray>\n"
+            "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n"
+            "5\n"
+            "        </DataArray>\n"
+            "      </Cells>\n"
+            "    </Piece>\n"
+            "  </UnstructuredGrid>\n"
+            "</VTKFile>\n");
+}
+
+TEST(VtuWriter, SizeMismatchesThrow) {
+  const auto throws = [](auto change) {
+    VtuData data = mixed_mesh();
+    change(data);
+    EXPECT_THROW(format_vtu(data), std::invalid_argument);
+  };
+  throws([](VtuData& d) { d.point_scalars[0].second.pop_back(); });
+  throws([](VtuData& d) { d.point_vectors[0].second.conservativeResize(2, 4); });
+  throws([](VtuData& d) { d.cell_scalars[0].second.push_back(0); });
+  throws([](VtuData& d) { d.cell_ints[0].second.pop_back(); });
+  throws([](VtuData& d) { d.tris.push_back({0, 1, 2}); });  // cell arrays now one short
+  throws([](VtuData& d) { d.quads[0][3] = 5; });            // no point 5
+  throws([](VtuData& d) { d.tris[0][0] = -1; });
+  throws([](VtuData& d) { d.cell_scalars[0].first = ""; });
+  throws([](VtuData& d) { d.point_scalars[0].first = "velocity"; });  // repeated in PointData
+  throws([](VtuData& d) { d.cell_ints[0].first = "bad\nname"; });
+  throws([](VtuData& d) { d.time = nan_value; });
+  try {
+    VtuData data = mixed_mesh();
+    data.cell_scalars[0].second.push_back(0);
+    format_vtu(data);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'pressure' has 3 entries, expected 2"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(VtuWriter, NonFiniteValuesAndEscapedNames) {
+  VtuData data = mixed_mesh();
+  data.point_scalars[0].second = {nan_value, inf_value, -inf_value, -nan_value, 5e-324};
+  data.cell_scalars[0].first = "a<b & \"c\"";
+  const std::string xml = format_vtu(data);
+  EXPECT_EQ(xml_error(xml), "");
+  EXPECT_EQ(array_values(xml, "temperature"), (Tokens{"nan", "inf", "-inf", "nan", "5e-324"}));
+  EXPECT_NE(xml.find("Name=\"a&lt;b &amp; &quot;c&quot;\""), std::string::npos);
+}
+
+TEST(PvdWriter, ExactOutputAndChecks) {
+  const std::string pvd = format_pvd({{0.0, "out/s_0.vtu"}, {1e-5, "out/s&1.vtu"}});
+  EXPECT_EQ(pvd,
+            "<?xml version=\"1.0\"?>\n"
+            "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+            "  <Collection>\n"
+            "    <DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"out/s_0.vtu\"/>\n"
+            "    <DataSet timestep=\"1e-05\" group=\"\" part=\"0\" file=\"out/s&amp;1.vtu\"/>\n"
+            "  </Collection>\n"
+            "</VTKFile>\n");
+  EXPECT_EQ(xml_error(pvd), "");
+  EXPECT_EQ(xml_error(format_pvd({})), "");
+  EXPECT_THROW(format_pvd({{nan_value, "a.vtu"}}), std::invalid_argument);
+  EXPECT_THROW(format_pvd({{0.0, ""}}), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------- atomic file
+
+class AtomicFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ricochet_atomic_" + std::to_string(std::random_device{}()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::permissions(dir_ / "ro", fs::perms::owner_all, ignored);
+    fs::remove_all(dir_, ignored);
+  }
+  // Every path under the test directory, relative to it.
+  std::set<std::string> entries() const {
+    std::set<std::string> out;
+    for (const auto& entry : fs::recursive_directory_iterator(dir_)) {
+      out.insert(fs::relative(entry.path(), dir_).generic_string());
+    }
+    return out;
+  }
+  static std::string read(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+  fs::path dir_;
+};
+
+TEST_F(AtomicFile, WritesCreatesParentsAndLeavesNoTemporary) {
+  const fs::path target = dir_ / "a" / "b" / "summary.json";
+  const std::string content("binary\0 and\nlines\n", 18);
+  write_file_atomic(target, content);
+  EXPECT_EQ(read(target), content);
+  EXPECT_EQ(entries(), (std::set<std::string>{"a", "a/b", "a/b/summary.json"}));
+  write_file_atomic(target, "short");  // replaces an existing file
+  EXPECT_EQ(read(target), "short");
+  write_file_atomic(target, "");
+  EXPECT_EQ(read(target), "");
+  EXPECT_EQ(entries(), (std::set<std::string>{"a", "a/b", "a/b/summary.json"}));
+}
+
+TEST_F(AtomicFile, PathUnderRegularFileThrowsAndLeavesNothing) {
+  write_file_atomic(dir_ / "blocker", "keep");
+  for (const fs::path& target : {dir_ / "blocker" / "out.json", dir_ / "blocker" / "sub" / "x"}) {
+    try {
+      write_file_atomic(target, "data");
+      ADD_FAILURE() << "no exception for " << target;
+    } catch (const std::runtime_error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(target.string()), std::string::npos) << message;
+      EXPECT_NE(message.find("Not a directory"), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  }
+  EXPECT_EQ(entries(), std::set<std::string>{"blocker"});
+  EXPECT_EQ(read(dir_ / "blocker"), "keep");
+}
+
+TEST_F(AtomicFile, FailedRenameRemovesTemporary) {
+  fs::create_directories(dir_ / "out.json" / "inside");  // a directory where the file should go
+  EXPECT_THROW(write_file_atomic(dir_ / "out.json", "data"), std::runtime_error);
+  EXPECT_EQ(entries(), (std::set<std::string>{"out.json", "out.json/inside"}));
+  EXPECT_THROW(write_file_atomic(dir_ / "dir" / "", "data"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace ricochet
