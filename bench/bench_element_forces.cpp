@@ -3,7 +3,6 @@
 // field, for every element formulation x material in plane stress.
 // Reported: time per call, and element_steps_per_second = cells processed per second
 // [cells/s] (items_per_second counts the same cells).
-#include <cmath>
 #include <string>
 
 #include "bench/bench_common.hpp"

@@ -125,6 +125,24 @@ ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
   return p;
 }
 
+ObstacleSpec read_obstacle(const TableReader& t, int index) {
+  ObstacleSpec o;
+  o.where = t.path();
+  o.name = t.text("name", "obstacle" + std::to_string(index));
+  t.choice("type", "line", {"line"});
+  o.point = t.vec2("point", Vec2::Zero());
+  o.normal = t.vec2("normal");
+  if (!(o.normal.norm() > 0.0)) t.fail("normal", "must be a non-zero vector (the outward normal)");
+  o.normal.normalize();
+  o.friction = t.number("friction", 0.0, Range::non_negative());
+  if (const auto by_body = t.table("friction_by_body")) {
+    for (const auto& body : by_body->keys()) o.friction_by_body[body] = by_body->number(body, Range::non_negative());
+    by_body->finish();
+  }
+  t.finish();
+  return o;
+}
+
 }  // namespace
 
 CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
@@ -145,7 +163,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   const TableReader root(doc, "", ctx);
   c.name = root.text("name", std::filesystem::path(file).stem().string());
   c.description = root.text("description", "");
-  c.scheme = root.choice("scheme", "explicit", {"explicit"});
+  c.scheme = root.choice("scheme", "explicit", {"explicit", "semi_explicit"});
   c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
                                                                               : PlaneMode::strain;
   c.gravity = root.vec2("gravity", Vec2::Zero());
@@ -174,6 +192,27 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   const std::string first_body = c.bodies.front().name;
   for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
+
+  const auto obstacles = root.tables("obstacles");
+  for (std::size_t i = 0; i < obstacles.size(); ++i) {
+    c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i)));
+    for (const auto& [body, mu] : c.obstacles.back().friction_by_body) {
+      bool known = false;
+      for (const auto& b : c.bodies) known = known || b.name == body;
+      if (!known) obstacles[i].fail("friction_by_body", "no body named \"" + body + "\"");
+    }
+  }
+  if (!c.obstacles.empty() && c.scheme == "explicit")
+    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] need \"semi_explicit\"");
+  if (const auto ct = root.table("contact")) {
+    c.contact.level = ct->choice("level", "position", {"position", "velocity"}) == "position"
+                          ? ContactLevel::position
+                          : ContactLevel::velocity;
+    c.contact.rho_factor = ct->number("rho_factor", 1.0, Range::open(0.0, 2.0));
+    c.contact.tolerance = ct->number("tolerance", 1e-10, Range{0.0, 1e-2, true, false});
+    c.contact.max_sweeps = static_cast<int>(ct->integer("max_sweeps", 200, 1, 100000));
+    ct->finish();
+  }
 
   const auto time = root.table("time");
   if (!time) root.fail("time", "missing required table [time] (at least time.end)");

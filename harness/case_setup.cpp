@@ -62,7 +62,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   std::vector<BodyInput> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
-    if (!mesh.quads.empty() || !mesh.tris.empty()) {
+    {
       for (const BoxNodeSet& s : b.node_sets) {
         std::vector<int> nodes;
         for (int i = 0; i < mesh.num_nodes(); ++i) {
@@ -118,6 +118,15 @@ PreparedCase prepare_case(const CaseSpec& spec) {
       }
     }
   }
+
+  for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back({o.name, o.point, o.normal});
+  s.friction.assign(c.bodies.size(), std::vector<double>(c.obstacles.size(), 0.0));
+  for (std::size_t b = 0; b < c.bodies.size(); ++b)
+    for (std::size_t o = 0; o < c.obstacles.size(); ++o) {
+      const auto it = c.obstacles[o].friction_by_body.find(c.bodies[b].name);
+      s.friction[b][o] = it != c.obstacles[o].friction_by_body.end() ? it->second : c.obstacles[o].friction;
+    }
+  s.contact = c.contact;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");

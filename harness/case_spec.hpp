@@ -12,7 +12,7 @@
 #include <toml++/toml.h>
 
 #include "harness/mesh_generators.hpp"
-#include "solver/central_difference.hpp"
+#include "solver/contact.hpp"
 #include "solver/model.hpp"
 
 namespace ricochet {
@@ -70,6 +70,15 @@ struct ProbeSpec {
   std::string where;
 };
 
+struct ObstacleSpec {
+  std::string name;
+  Vec2 point = Vec2::Zero();    // [m]
+  Vec2 normal = Vec2::UnitY();  // normalized on read
+  double friction = 0.0;        // mu for every body [-]
+  std::map<std::string, double> friction_by_body;  // per-body mu [-]
+  std::string where;
+};
+
 struct CaseSpec {
   std::string file;  // as given
   std::string name;
@@ -84,6 +93,8 @@ struct CaseSpec {
   std::string default_mesh;  // top-level `mesh`
   std::vector<BodySpec> bodies;
   std::vector<BoundarySpec> boundaries;
+  std::vector<ObstacleSpec> obstacles;
+  ContactSettings contact;
 
   double end_time = 0.0;          // [s]
   std::optional<double> dt;       // [s]; absent = automatic

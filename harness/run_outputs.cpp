@@ -83,7 +83,14 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["mesh"] = mesh;
   j["element"] = element;
   j["plane"] = plane_name(c.plane);
-  j["friction_coeff"] = nullptr;
+  // The friction coefficient of the first body-obstacle pair (null without obstacles).
+  if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
+    j["friction_coeff"] = nullptr;
+  else
+    j["friction_coeff"] = pc.settings.friction.front().front();
+  j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
+  j["contact_level"] = pc.settings.obstacles.empty() ? Json()
+                       : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
   j["dt"] = r.dt;
@@ -109,19 +116,25 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["element_steps_per_second"] = r.element_steps_per_second;
   j["initial_energy"] = r.initial_energy;
   j["energy_error_max"] = r.energy_error_max;
-  j["penetration_max"] = 0.0;
+  j["penetration_max"] = r.penetration_max;
+  j["friction_dissipation"] = r.friction_dissipation;
+  j["contact_work"] = r.contact_work;
   j["von_mises_max"] = r.von_mises_max;
   j["von_mises_max_time"] = r.von_mises_max_time;
   Json ci = Json::object();
-  ci["mean"] = 0.0;
-  ci["max"] = 0;
+  ci["mean"] = r.contact_sweeps_mean;
+  ci["max"] = r.contact_sweeps_max;
+  ci["steps_with_contact"] = r.contact_steps;
+  ci["unconverged_steps"] = r.contact_unconverged_steps;
+  ci["candidates"] = r.contact_candidates;
   j["contact_iterations"] = ci;
   const History& h = r.history;
   if (h.rows() > 0) {
     Json fin = Json::object();
     const std::size_t last = h.rows() - 1;
     for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
-                          "external_work", "total_energy", "energy_error", "momentum_x", "momentum_y"})
+                          "external_work", "friction_dissipation", "contact_work", "total_energy",
+                          "energy_error", "momentum_x", "momentum_y"})
       fin[k] = h.at(last, h.column(k));
     j["final"] = fin;
   }
@@ -175,10 +188,10 @@ std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const s
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "%s: %s  t=%.4g s  %ld steps of %.4g s  %d cells  %.3g s wall  %.3g element-steps/s"
-                "  energy_error_max=%.3g  von_mises_max=%.4g Pa",
+                "  energy_error_max=%.3g  penetration_max=%.3g m  von_mises_max=%.4g Pa",
                 pc.spec.name.c_str(), r.status == RunStatus::ok ? "ok" : "DIVERGED", r.end_time,
                 r.steps, r.dt, pc.model.num_cells(), r.wall_seconds, r.element_steps_per_second,
-                r.energy_error_max, r.von_mises_max);
+                r.energy_error_max, r.penetration_max, r.von_mises_max);
   std::string s = buf;
   if (r.status == RunStatus::diverged) s += "  (" + r.reason + ")";
   return s + "  -> " + dir;

@@ -15,7 +15,9 @@ std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
                                 "hourglass_energy", "external_work", "friction_dissipation",
                                 "total_energy",  "energy_error",    "momentum_x",
                                 "momentum_y",    "von_mises_max",   "penetration_max",
-                                "contact_nodes", "normal_force",    "tangential_force"};
+                                "contact_nodes", "normal_force",    "tangential_force",
+                                "contact_work",  "contact_stick",   "contact_slip",
+                                "contact_iterations"};
   for (const auto& p : probes)
     for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
   return c;
@@ -52,14 +54,17 @@ struct Recorder {
   RunResult& result;
   std::vector<double> cell_vm;
 
-  double record(const State& s, const Energies& e, double error) {
+  double record(const State& s, const Energies& e, double error, const ContactState& c,
+                double depth) {
     cell_von_mises(model, s.u.data(), cell_vm.data());
     const double vm = cell_vm.empty() ? 0.0 : *std::max_element(cell_vm.begin(), cell_vm.end());
     const Vec2 p = linear_momentum(model, s);
     auto& v = result.history.values;
     v.insert(v.end(), {s.time, e.kinetic, e.strain, e.hourglass, e.external_work,
-                       e.friction_dissipation, e.total(), error, p.x(), p.y(), vm, 0.0, 0.0,
-                       0.0, 0.0});
+                       e.friction_dissipation, e.total(), error, p.x(), p.y(), vm, depth,
+                       static_cast<double>(c.active_count), c.normal_force, c.tangential_force,
+                       c.contact_work, static_cast<double>(c.stick_count),
+                       static_cast<double>(c.slip_count), static_cast<double>(c.sweeps)});
     for (const auto& pr : settings.probes) {
       const int d = 2 * pr.node;
       v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});
@@ -103,7 +108,13 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   Recorder rec{model, settings, result, std::vector<double>(model.num_cells())};
 
   State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement);
+  ContactState contact = make_contact_state(model, settings.obstacles, settings.friction, settings.prescribed);
+  const bool with_contact = !contact.candidates.empty();
+  result.contact_candidates = static_cast<int>(contact.candidates.size());
   const Eigen::VectorXd u0 = s.u;
+  // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
+  // half of any contact impulse of the first step.
+  const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
   double reference_energy = 0.0;
   std::size_t next_sample = 0, next_field = 0;
   const long monitor_every = std::max(1, settings.monitor_every);
@@ -116,6 +127,7 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
     const bool field = next_field < field_steps.size() && field_steps[next_field] == n;
     const bool monitor = sample || field || n % monitor_every == 0 || n == planned;
     evaluate(model, settings.prescribed, s, monitor);
+    if (with_contact) contact_phase(model, settings.obstacles, settings.contact, contact, s);
 
     auto diverge = [&](std::string why) {
       result.status = RunStatus::diverged;
@@ -128,8 +140,9 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
       break;
     }
     if (monitor) {
-      const Energies e = observe_energies(model, s, u0);
-      if (n == 0) result.initial_energy = e.total();
+      Energies e = observe_energies(model, s, u0);
+      e.friction_dissipation = contact.friction_dissipation;
+      if (n == 0) result.initial_energy = kinetic0 + e.strain + e.hourglass;
       reference_energy = std::max({reference_energy, result.initial_energy, std::abs(e.external_work)});
       if (!std::isfinite(e.total()) || !std::isfinite(e.external_work)) {
         diverge("non-finite state");
@@ -143,7 +156,9 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
       }
       const double error = energy_error(e, result.initial_energy, reference_energy);
       if (sample) {
-        const double vm = rec.record(s, e, error);
+        const double depth = with_contact ? penetration(model, settings.obstacles, contact, s.u) : 0.0;
+        result.penetration_max = std::max(result.penetration_max, depth);
+        const double vm = rec.record(s, e, error, contact, depth);
         result.energy_error_max = std::max(result.energy_error_max, error);
         if (vm > result.von_mises_max) {
           result.von_mises_max = vm;
@@ -164,6 +179,13 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   result.wall_seconds = std::chrono::duration<double>(wall1 - wall0).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   result.steps = s.step;
+  result.friction_dissipation = contact.friction_dissipation;
+  result.contact_work = contact.contact_work;
+  result.contact_steps = contact.steps_with_contact;
+  result.contact_sweeps_max = contact.sweeps_max;
+  result.contact_unconverged_steps = contact.unconverged_steps;
+  if (contact.steps_with_contact > 0)
+    result.contact_sweeps_mean = static_cast<double>(contact.sweeps_total) / contact.steps_with_contact;
   result.end_time = s.time;
   if (result.wall_seconds > 0.0)
     result.element_steps_per_second =

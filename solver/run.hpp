@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/central_difference.hpp"
+#include "solver/contact.hpp"
 
 namespace ricochet {
 
@@ -25,6 +25,12 @@ struct RunSettings {
   double energy_growth_limit = 2.0;  // diverged when total energy > limit * reference energy [-]
   int monitor_every = 50;            // divergence checks at least every this many steps
   Eigen::VectorXd initial_displacement;  // optional, 2n [m]
+
+  // Rigid obstacles, with friction[b][o] the coefficient of body b against obstacle o. With
+  // obstacles the step is the semi-explicit one: contact_phase() between evaluate and update.
+  std::vector<LineObstacle> obstacles;
+  std::vector<std::vector<double>> friction;
+  ContactSettings contact;
 };
 
 enum class RunStatus { ok, diverged };
@@ -63,6 +69,14 @@ struct RunResult {
   double energy_error_max = 0.0;   // over samples [-]
   double von_mises_max = 0.0;      // over samples and cells [Pa]
   double von_mises_max_time = 0.0; // [s]
+  double penetration_max = 0.0;    // over samples [m]
+  double friction_dissipation = 0.0;  // at the end [J]
+  double contact_work = 0.0;       // at the end [J]
+  int contact_candidates = 0;      // boundary node-obstacle pairs watched
+  double contact_sweeps_mean = 0.0;  // Gauss-Seidel sweeps per step with contact
+  int contact_sweeps_max = 0;
+  long contact_steps = 0;          // steps with at least one active contact
+  long contact_unconverged_steps = 0;  // steps that hit the sweep cap
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time
   double element_steps_per_second = 0.0;

@@ -1,0 +1,76 @@
+// The local frictional contact problem of one contact in 2D, in its local frame (n, t):
+// reaction r = (r_n, r_t), relative quantity x = (x_n, x_t) (a gap and slip increment at the
+// position level, a relative velocity at the velocity level), x = x_free + w r with an
+// isotropic local compliance w. Sign convention (literature 2.1): x_n > 0 separates, r_n >= 0
+// pushes apart, sliding gives r_t = -mu r_n sign(x_t). Pure functions, no state.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+namespace ricochet {
+
+enum class ContactStatus : std::uint8_t { open, stick, slip };
+
+struct LocalPair {
+  double n = 0.0;
+  double t = 0.0;
+};
+
+// Projection onto the Coulomb cone K_mu = {|r_t| <= mu r_n} (literature 2.3, after GetFEM's
+// De_Saxce_projection): inside -> unchanged (stick); in the polar cone -> 0 (separation);
+// otherwise onto the cone surface (slip). mu = 0 gives r_n = max(0, r*_n), r_t = 0.
+inline LocalPair project_coulomb(LocalPair r, double mu) {
+  const double at = std::abs(r.t);
+  if (at <= mu * r.n) return r;
+  if (mu * at <= -r.n) return {0.0, 0.0};
+  const double rn = (r.n + mu * at) / (1.0 + mu * mu);
+  return {rn, std::copysign(mu * rn, r.t)};
+}
+
+inline ContactStatus classify(LocalPair r, double mu) {
+  if (!(r.n > 0.0)) return ContactStatus::open;
+  return std::abs(r.t) < mu * r.n * (1.0 - 1e-12) ? ContactStatus::stick : ContactStatus::slip;
+}
+
+// One bi-potential predictor-corrector update (paper Eq. (5)):
+//   r* = r - rho (x + mu |x_t| n),  r <- Proj_K(r*),  with x = x_free + w r.
+inline LocalPair bipotential_update(LocalPair r, LocalPair x_free, double w, double mu, double rho) {
+  const LocalPair x{x_free.n + w * r.n, x_free.t + w * r.t};
+  return project_coulomb({r.n - rho * (x.n + mu * std::abs(x.t)), r.t - rho * x.t}, mu);
+}
+
+struct LocalSolution {
+  LocalPair r;
+  int iterations = 0;   // predictor-corrector updates performed
+  bool converged = false;
+};
+
+// Iterates bipotential_update from r0 until |r_{i+1} - r_i| <= tol (|r_{i+1}| + tiny) or
+// max_iterations. With rho = 1/w and mu = 0 the first update is exact.
+inline LocalSolution solve_local(LocalPair x_free, double w, double mu, double rho, LocalPair r0,
+                                 double tol, int max_iterations) {
+  LocalSolution s{r0, 0, false};
+  while (s.iterations < max_iterations) {
+    const LocalPair next = bipotential_update(s.r, x_free, w, mu, rho);
+    ++s.iterations;
+    const double change = std::hypot(next.n - s.r.n, next.t - s.r.t);
+    s.r = next;
+    if (change <= tol * std::hypot(next.n, next.t) || change == 0.0) {
+      s.converged = true;
+      break;
+    }
+  }
+  return s;
+}
+
+// The fixed point of the iteration with rho = 1/w in closed form (literature 2.5, "impulse
+// return map"): r_n = max(0, -x_free_n / w), stick if the stick force fits in the cone.
+inline LocalPair closed_form_reaction(LocalPair x_free, double w, double mu) {
+  const double rn = std::max(0.0, -x_free.n / w);
+  const double rt_stick = -x_free.t / w;
+  if (std::abs(rt_stick) <= mu * rn) return {rn, rt_stick};
+  return {rn, -std::copysign(mu * rn, x_free.t)};
+}
+
+}  // namespace ricochet
