@@ -163,7 +163,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   const TableReader root(doc, "", ctx);
   c.name = root.text("name", std::filesystem::path(file).stem().string());
   c.description = root.text("description", "");
-  c.scheme = root.choice("scheme", "explicit", {"explicit", "semi_explicit"});
+  c.scheme = root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"});
   c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
                                                                               : PlaneMode::strain;
   c.gravity = root.vec2("gravity", Vec2::Zero());
@@ -203,7 +203,8 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     }
   }
   if (!c.obstacles.empty() && c.scheme == "explicit")
-    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] need \"semi_explicit\"");
+    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] need \"semi_explicit\", "
+                        "\"implicit\" or \"explicit_penalty\"");
   if (const auto ct = root.table("contact")) {
     c.contact.level = ct->choice("level", "position", {"position", "velocity"}) == "position"
                           ? ContactLevel::position
@@ -212,6 +213,20 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     c.contact.tolerance = ct->number("tolerance", 1e-10, Range{0.0, 1e-2, true, false});
     c.contact.max_sweeps = static_cast<int>(ct->integer("max_sweeps", 200, 1, 100000));
     ct->finish();
+  }
+
+  if (const auto im = root.table("implicit")) {
+    c.implicit.theta = im->number("theta", 0.5, Range::closed(0.5, 1.0));
+    c.implicit.xi = im->number("xi", 0.5, Range::closed(0.5, 1.0));
+    c.implicit.newton_tolerance = im->number("newton_tolerance", 1e-10, Range{0.0, 1e-2, true, false});
+    c.implicit.max_newton_iterations = static_cast<int>(im->integer("max_newton_iterations", 25, 1, 1000));
+    c.implicit.linear_tolerance = im->number("linear_tolerance", 1e-12, Range{0.0, 1e-2, true, false});
+    c.implicit.max_linear_iterations = static_cast<int>(im->integer("max_linear_iterations", 10000, 1, 10'000'000));
+    im->finish();
+  }
+  if (const auto pe = root.table("penalty")) {
+    c.penalty.scale_factor = pe->number("scale_factor", 0.1, Range{0.0, 1e6, true, false});
+    pe->finish();
   }
 
   const auto time = root.table("time");
@@ -231,7 +246,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   c.sample_interval = c.end_time / 1000.0;
   if (const auto out = root.table("output")) {
     c.sample_interval = out->number("interval", c.sample_interval, Range::non_negative());
-    c.field_times = out->numbers("fields", Range::closed(0.0, c.end_time));
+    c.field_times = out->numbers("fields", Range::non_negative());  // times after the end are skipped
     for (const auto& p : out->tables("probes")) {
       c.probes.push_back(read_probe(p, first_body));
       for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)

@@ -94,7 +94,6 @@ PreparedCase prepare_case(const CaseSpec& spec) {
 
   RunSettings& s = p.settings;
   p.dt_auto = !c.dt.has_value();
-  s.dt = p.dt_auto ? stable_time_step(p.model, c.dt_safety) : *c.dt;
   s.end_time = c.end_time;
   s.sample_interval = c.sample_interval;
   s.field_times = c.field_times;
@@ -127,6 +126,19 @@ PreparedCase prepare_case(const CaseSpec& spec) {
       s.friction[b][o] = it != c.obstacles[o].friction_by_body.end() ? it->second : c.obstacles[o].friction;
     }
   s.contact = c.contact;
+  s.penalty = c.penalty;
+  s.contact_method = c.scheme == "explicit_penalty" ? RunSettings::ContactMethod::penalty
+                                                    : RunSettings::ContactMethod::bipotential;
+  // The automatic step: safety x the elements' estimate; with penalty contact, safety x the
+  // combined limit 1/sqrt(1/dt_e^2 + 1/dt_p^2) of elements and springs (dt_p = min 2 sqrt(m/k)):
+  // min(dt_e, dt_p) alone is not stable when the two are close (tests/test_penalty_contact.cpp).
+  s.dt = stable_time_step(p.model, c.dt_safety);
+  if (s.contact_method == RunSettings::ContactMethod::penalty && !s.obstacles.empty()) {
+    const PenaltyState springs = make_penalty_state(p.model, s.obstacles, s.friction, s.prescribed, s.penalty);
+    p.penalty_critical_dt = penalty_critical_dt(p.model, springs);
+    s.dt = penalty_stable_time_step(p.model, springs, c.dt_safety);
+  }
+  if (!p.dt_auto) s.dt = *c.dt;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");
@@ -149,6 +161,11 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     s.probes.push_back({pr.name, info.node});
   }
   return p;
+}
+
+RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
+  if (pc.spec.scheme == "implicit") return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
+  return run_explicit(pc.model, pc.settings, progress);
 }
 
 }  // namespace ricochet

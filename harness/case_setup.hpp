@@ -23,11 +23,16 @@ struct PreparedCase {
   Model model;
   RunSettings settings;
   bool dt_auto = false;
+  double penalty_critical_dt = 0.0;  // 2 sqrt(m/k) over the penalty springs [s]; 0 if none
   std::vector<ProbeInfo> probes;
 };
 
 // Throws InputError naming the case file and key for anything that cannot be set up
 // (unreadable mesh, unknown node set, degenerate cell, conflicting prescriptions).
 PreparedCase prepare_case(const CaseSpec& spec);
+
+// Runs the case with its scheme: explicit and semi-explicit and explicit penalty through the
+// central-difference loop, implicit through the theta-scheme.
+RunResult run_case(const PreparedCase& pc, const ProgressFn& progress = {});
 
 }  // namespace ricochet

@@ -12,7 +12,7 @@
 #include <toml++/toml.h>
 
 #include "harness/mesh_generators.hpp"
-#include "solver/contact.hpp"
+#include "solver/implicit.hpp"
 #include "solver/model.hpp"
 
 namespace ricochet {
@@ -95,6 +95,8 @@ struct CaseSpec {
   std::vector<BoundarySpec> boundaries;
   std::vector<ObstacleSpec> obstacles;
   ContactSettings contact;
+  ImplicitSettings implicit;
+  PenaltySettings penalty;
 
   double end_time = 0.0;          // [s]
   std::optional<double> dt;       // [s]; absent = automatic

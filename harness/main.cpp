@@ -79,8 +79,8 @@ int run_command(const std::vector<std::string>& args) {
   if (out_dir.empty()) out_dir = "results/" + spec.name;
 
   ProgressLine progress(!quiet);
-  const ricochet::RunResult r = ricochet::run_explicit(
-      pc.model, pc.settings, [&progress](long s, long n, double t) { progress(s, n, t); });
+  const ricochet::RunResult r =
+      ricochet::run_case(pc, [&progress](long s, long n, double t) { progress(s, n, t); });
   progress.done();
   ricochet::write_run_outputs(out_dir, pc, r);
   if (!quiet) std::printf("%s\n", ricochet::one_line_summary(pc, r, out_dir).c_str());

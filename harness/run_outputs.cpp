@@ -89,7 +89,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   else
     j["friction_coeff"] = pc.settings.friction.front().front();
   j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
-  j["contact_level"] = pc.settings.obstacles.empty() ? Json()
+  j["contact_level"] = pc.settings.obstacles.empty() || pc.spec.scheme == "explicit_penalty" ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
@@ -97,6 +97,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["dt_mode"] = pc.dt_auto ? "auto" : "fixed";
   j["dt_safety"] = pc.dt_auto ? Json(c.dt_safety) : Json();
   j["critical_dt"] = pc.model.critical_dt;
+  j["penalty_critical_dt"] = pc.penalty_critical_dt > 0.0 ? Json(pc.penalty_critical_dt) : Json();
   j["end_time"] = c.end_time;
   j["time_reached"] = r.end_time;
   j["steps"] = r.steps;
@@ -111,6 +112,21 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   } else {
     j["diverged"] = nullptr;
   }
+  if (pc.spec.scheme == "implicit") {
+    Json im = Json::object();
+    im["theta"] = pc.spec.implicit.theta;
+    im["xi"] = pc.spec.implicit.xi;
+    im["newton_iterations"] = r.newton_iterations;
+    im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.newton_iterations) / r.steps : 0.0;
+    im["linear_iterations"] = r.linear_iterations;
+    j["implicit"] = im;
+  } else {
+    j["implicit"] = nullptr;
+  }
+  if (pc.spec.scheme == "explicit_penalty")
+    j["penalty_scale_factor"] = pc.spec.penalty.scale_factor;
+  else
+    j["penalty_scale_factor"] = nullptr;
   j["wall_seconds"] = r.wall_seconds;
   j["cpu_seconds"] = r.cpu_seconds;
   j["element_steps_per_second"] = r.element_steps_per_second;

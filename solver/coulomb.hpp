@@ -22,7 +22,7 @@ struct LocalPair {
 // otherwise onto the cone surface (slip). mu = 0 gives r_n = max(0, r*_n), r_t = 0.
 inline LocalPair project_coulomb(LocalPair r, double mu) {
   const double at = std::abs(r.t);
-  if (at <= mu * r.n) return r;
+  if (r.n >= 0.0 && at <= mu * r.n) return r;  // r.n >= 0: with mu = 0, 0 <= 0 * r.n holds for r.n < 0
   if (mu * at <= -r.n) return {0.0, 0.0};
   const double rn = (r.n + mu * at) / (1.0 + mu * mu);
   return {rn, std::copysign(mu * rn, r.t)};

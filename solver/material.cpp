@@ -72,6 +72,10 @@ double material_wave_speed(const Material& m) {
   return std::visit([](const auto& x) { return x.wave_speed(); }, m);
 }
 
+Eigen::Matrix4d material_tangent(const Material& m, const Mat2& F) {
+  return std::visit([&F](const auto& x) { return x.tangent(F); }, m);
+}
+
 double von_mises(const Material& m, const Mat2& F) {
   return std::visit(
       [&F](const auto& mat) {

@@ -4,8 +4,13 @@
 //   OutOfPlane out_of_plane(F) the out-of-plane stretch F33 [-] and 2nd Piola-Kirchhoff S33 [Pa]
 //   double wave_speed()        small-strain in-plane dilatational wave speed c_p [m/s]
 //   double density             reference mass density rho [kg/m^3]
+//   Matrix4d tangent(F)         A = dP/dF, the consistent tangent of the (reduced) law [Pa],
+//                               indexed A(2*i + J, 2*k + L) = dP_iJ / dF_kL (i, k spatial and
+//                               J, L material indices in 0..1). Hyperelastic, so A = A^T.
+//   first_piola_and_tangent(F, P, A)   both in one pass (P bitwise as first_piola computes it)
 // F is the in-plane 2x2 deformation gradient. Plane strain fixes F33 = 1; plane stress
-// eliminates F33 by S33 = 0, so W and P are the reduced 2D functions (P stays exactly dW/dF).
+// eliminates F33 by S33 = 0, so W and P are the reduced 2D functions (P stays exactly dW/dF)
+// and A includes the dependence of the eliminated F33 on F.
 #pragma once
 
 #include <cmath>
@@ -49,6 +54,42 @@ struct StVenantKirchhoff {
     S.diagonal().array() += lambda * E.trace();
     return F * S;
   }
+  // A_ik(J, L) = delta_ik S_JL + lambda F_iJ F_kL + mu (b_ik delta_JL + F_iL F_kJ), b = F F^T.
+  // With f = (F00, F01, F10, F11) (index 2i + J): mu F_iL F_kJ is mu f f^T except at the
+  // entries (0,3), (1,2) (and mirrors), where it differs by -mu det F, +mu det F.
+  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const {
+    const double a = F(0, 0), b = F(0, 1), c = F(1, 0), d = F(1, 1);
+    const double mu = shear_modulus;
+    // E = (F^T F - I)/2, S = lambda tr(E) I + 2 mu E, P = F S.
+    const double e00 = 0.5 * (a * a + c * c - 1.0), e11 = 0.5 * (b * b + d * d - 1.0);
+    const double e01 = 0.5 * (a * b + c * d);
+    const double ltr = lambda * (e00 + e11);
+    const double s00 = 2.0 * mu * e00 + ltr, s11 = 2.0 * mu * e11 + ltr, s01 = 2.0 * mu * e01;
+    P(0, 0) = a * s00 + b * s01;
+    P(0, 1) = a * s01 + b * s11;
+    P(1, 0) = c * s00 + d * s01;
+    P(1, 1) = c * s01 + d * s11;
+    const double lm = lambda + mu;
+    const double b00 = mu * (a * a + b * b), b01 = mu * (a * c + b * d);
+    const double b11 = mu * (c * c + d * d);
+    const double mj = mu * (a * d - b * c);
+    A(0, 0) = lm * a * a + s00 + b00;
+    A(1, 1) = lm * b * b + s11 + b00;
+    A(2, 2) = lm * c * c + s00 + b11;
+    A(3, 3) = lm * d * d + s11 + b11;
+    A(0, 1) = A(1, 0) = lm * a * b + s01;
+    A(2, 3) = A(3, 2) = lm * c * d + s01;
+    A(0, 2) = A(2, 0) = lm * a * c + b01;
+    A(1, 3) = A(3, 1) = lm * b * d + b01;
+    A(0, 3) = A(3, 0) = lm * a * d - mj;
+    A(1, 2) = A(2, 1) = lm * b * c + mj;
+  }
+  Eigen::Matrix4d tangent(const Mat2& F) const {
+    Mat2 P;
+    Eigen::Matrix4d A;
+    first_piola_and_tangent(F, P, A);
+    return A;
+  }
   OutOfPlane out_of_plane(const Mat2& F) const;
   double wave_speed() const { return std::sqrt((lambda + 2.0 * shear_modulus) / density); }
 };
@@ -83,6 +124,48 @@ struct NeoHookean {
     f_inv_t /= j2;
     return shear_modulus * F + (lambda * log_j - shear_modulus) * f_inv_t;
   }
+  // With G = F^-T, beta = lambda ln J - mu and d ln J / dF = (1 + s'/2) G:
+  // A_ik(J, L) = mu delta_ik delta_JL + lambda (1 + s'/2) G_iJ G_kL - beta G_iL G_kJ, where
+  // s' = ds/d(ln J2) = -lambda / (mu e^s + lambda/2) in plane stress (implicit function of
+  // S33 = 0) and 0 in plane strain. With g = (G00, G01, G10, G11) (index 2i + J), G_iL G_kJ is
+  // g g^T except at the entries (0,3), (1,2) (and mirrors), where it differs by -det G, +det G.
+  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const {
+    const double j2 = F.determinant();
+    const double log_j2 = std::log(j2);
+    const double s = log_c33(log_j2);
+    const double log_j = log_j2 + 0.5 * s;
+    Mat2 f_inv_t;
+    f_inv_t << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
+    f_inv_t /= j2;
+    const double mu = shear_modulus;
+    const double beta = lambda * log_j - mu;
+    P = mu * F + beta * f_inv_t;
+    // lambda (1 + s'/2) = lambda mu e^s / (mu e^s + lambda/2), and S33 = 0 gives
+    // mu e^s = mu - lambda ln J (= -beta) without another exp.
+    double lam = lambda;
+    if (plane == PlaneMode::stress) {
+      const double mes = -beta;
+      lam = lambda * mes / (mes + 0.5 * lambda);
+    }
+    const double p = f_inv_t(0, 0), q = f_inv_t(0, 1), r = f_inv_t(1, 0), w = f_inv_t(1, 1);
+    const double lb = lam - beta, bj = beta / j2;  // bj = beta det G
+    A(0, 0) = lb * p * p + mu;
+    A(1, 1) = lb * q * q + mu;
+    A(2, 2) = lb * r * r + mu;
+    A(3, 3) = lb * w * w + mu;
+    A(0, 1) = A(1, 0) = lb * p * q;
+    A(0, 2) = A(2, 0) = lb * p * r;
+    A(1, 3) = A(3, 1) = lb * q * w;
+    A(2, 3) = A(3, 2) = lb * r * w;
+    A(0, 3) = A(3, 0) = lb * p * w + bj;
+    A(1, 2) = A(2, 1) = lb * q * r - bj;
+  }
+  Eigen::Matrix4d tangent(const Mat2& F) const {
+    Mat2 P;
+    Eigen::Matrix4d A;
+    first_piola_and_tangent(F, P, A);
+    return A;
+  }
   OutOfPlane out_of_plane(const Mat2& F) const;
   double wave_speed() const;
 };
@@ -91,6 +174,8 @@ using Material = std::variant<StVenantKirchhoff, NeoHookean>;
 
 double material_density(const Material& m);
 double material_wave_speed(const Material& m);
+// A = dP/dF of the material at F, indexed A(2*i + J, 2*k + L) = dP_iJ / dF_kL [Pa].
+Eigen::Matrix4d material_tangent(const Material& m, const Mat2& F);
 
 // Cauchy stress of the in-plane F and the von Mises equivalent of the full 3D state [Pa].
 double von_mises(const Material& m, const Mat2& F);

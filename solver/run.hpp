@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/contact.hpp"
+#include "solver/penalty_contact.hpp"
 
 namespace ricochet {
 
@@ -28,9 +28,14 @@ struct RunSettings {
 
   // Rigid obstacles, with friction[b][o] the coefficient of body b against obstacle o. With
   // obstacles the step is the semi-explicit one: contact_phase() between evaluate and update.
+  // The explicit loop treats obstacles by the bi-potential method (the semi-explicit scheme)
+  // or by penalty springs (the explicit penalty scheme).
+  enum class ContactMethod { bipotential, penalty };
   std::vector<LineObstacle> obstacles;
   std::vector<std::vector<double>> friction;
+  ContactMethod contact_method = ContactMethod::bipotential;
   ContactSettings contact;
+  PenaltySettings penalty;
 };
 
 enum class RunStatus { ok, diverged };
@@ -77,10 +82,16 @@ struct RunResult {
   int contact_sweeps_max = 0;
   long contact_steps = 0;          // steps with at least one active contact
   long contact_unconverged_steps = 0;  // steps that hit the sweep cap
+  long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
+  long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time
   double element_steps_per_second = 0.0;
 };
+
+// Copies a contact phase's accumulated totals into a result.
+void copy_contact_totals(const ContactState& c, RunResult& r);
+void copy_contact_totals(const PenaltyState& c, RunResult& r);
 
 // Called at monitor steps so a long run can show progress; must not modify anything.
 using ProgressFn = std::function<void(long step, long planned_steps, double time)>;

@@ -445,7 +445,7 @@ TEST(Explicit, HistoryLayout) {
       "external_work", "friction_dissipation", "total_energy", "energy_error",
       "momentum_x",    "momentum_y",     "von_mises_max",  "penetration_max",
       "contact_nodes", "normal_force",   "tangential_force", "contact_work",
-      "contact_stick", "contact_slip",   "contact_iterations"};
+      "contact_stick", "contact_slip",   "contact_iterations", "contact_energy"};
   const Model model = vibrating_slab(ElementKind::q4_viscous, 0.2);
   const std::vector<Probe> probes = {{"tip", 16}, {"mid", 42}};
   RunSettings s;

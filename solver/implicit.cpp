@@ -1,0 +1,415 @@
+#include "solver/implicit.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ricochet {
+
+ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
+                                       const ImplicitSettings& settings)
+    : model_(model), run_(run), set_(settings) {
+  s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement);
+  contact_ = make_contact_state(model, run.obstacles, run.friction, run.prescribed);
+  system_ = make_system_matrix(model);
+  const int n = model.num_dofs();
+  pcg_.resize(n);
+  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &inv_diag_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
+                             &y_, &impulse_, &prescribed_v_})
+    v->setZero(n);
+  s_.a.setZero();
+  s_.forces = internal_forces(model, s_.u.data(), s_.v_half.data(), s_.f_int.data(), true);
+
+  fixed_.assign(n, 0);
+  for (const auto& p : run.prescribed) fixed_[p.dof] = 1;
+  const SparseMatrixR& A = system_.matrix;
+  for (int i = 0; i < n; ++i)
+    for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) {
+      const int j = A.innerIndexPtr()[k];
+      if (!fixed_[i] && !fixed_[j]) continue;
+      (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
+    }
+  residuals_.reserve(set_.max_newton_iterations + 1);
+  direct_ = set_.linear_solver == LinearSolverKind::ldlt ||
+            (set_.linear_solver == LinearSolverKind::automatic && run.dt > model.critical_dt);
+  if (direct_) {
+    // The matrix is symmetric, so its row-major arrays are also the column-major arrays.
+    a_col_ = Eigen::SparseMatrix<double>(system_.matrix.transpose());
+    ldlt_.analyzePattern(a_col_);
+  }
+  const int directions = contact_.any_friction ? 2 : 1;
+  columns_.resize(n, directions * static_cast<int>(contact_.candidates.size()));
+  w_.resize(columns_.cols(), columns_.cols());
+  engaged_.assign(contact_.candidates.size(), 0);
+  r_vec_.resize(columns_.cols());
+}
+
+// Factorizes A. If A is indefinite (the tangent of a far-off iterate under strong compression,
+// e.g. St Venant-Kirchhoff's negative geometric stiffness), shifts it by lambda M with lambda =
+// 1, 4, 16, ... until it is positive definite: the iteration matrix changes, the converged
+// solution G = 0 does not (a damped Newton iteration). The contact problem needs W positive
+// definite.
+bool ImplicitIntegrator::factorize() {
+  const int n = model_.num_dofs();
+  double* a = a_col_.valuePtr();
+  std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    ldlt_.factorize(a_col_);
+    if (ldlt_.info() == Eigen::Success && ldlt_.vectorD().minCoeff() > 0.0) {
+      if (attempt > 0) {
+        ++shifted_iterations_;
+        for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
+      }
+      return true;
+    }
+    const double add = attempt == 0 ? 1.0 : 3.0 * std::pow(4.0, attempt - 1);  // lambda 1, 4, 16, ...
+    for (int i = 0; i < n; ++i)
+      if (!fixed_[i]) a[system_.diagonal_slots[i]] += add * model_.mass[i];
+  }
+  failure_ = "LDL^T factorization: matrix not positive definite even when shifted by 4^11 M";
+  return false;
+}
+
+ContactReport ImplicitIntegrator::contact_report() const { return report(contact_); }
+
+// Prescribed DOFs: identity rows and columns, so their velocity increment is zero.
+void ImplicitIntegrator::constrain_matrix() {
+  double* values = system_.matrix.valuePtr();
+  for (int k : constrained_entries_) values[k] = 0.0;
+  for (int k : constrained_diagonal_) values[k] = 1.0;
+  for (int i = 0; i < model_.num_dofs(); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
+}
+
+bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (direct_) {
+    x = ldlt_.solve(b);
+    return true;
+  }
+  const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance,
+                                 set_.max_linear_iterations);
+  linear_total_ += r.iterations;
+  if (!r.converged) {
+    failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
+    return false;
+  }
+  return true;
+}
+
+double ImplicitIntegrator::residual(bool with_energy) {
+  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
+  u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
+  s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
+  g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * impulse_;
+  for (const auto& p : run_.prescribed) {
+    prescribed_v_[p.dof] = g_[p.dof];  // the unconstrained residual: dt times the reaction
+    g_[p.dof] = 0.0;
+  }
+  const double scale = std::max({model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
+                                 model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
+                                 dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
+                                 dt * s_.f_ext.lpNorm<Eigen::Infinity>(),
+                                 dt * impulse_.lpNorm<Eigen::Infinity>(), 1e-300});
+  return g_.lpNorm<Eigen::Infinity>() / scale;
+}
+
+bool ImplicitIntegrator::solve_contact() {
+  const double dt = s_.dt, th = set_.theta;
+  const bool position = run_.contact.level == ContactLevel::position;
+  const double c = position ? dt * th : 1.0;  // x = x_free + c H y
+  ContactState& cs = contact_;
+  cs.active.clear();
+  for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
+    const ContactCandidate& cc = cs.candidates[k];
+    const LineObstacle& ob = run_.obstacles[cc.obstacle];
+    const int i = cc.node;
+    const Vec2 u_pred = u1_.segment<2>(2 * i) + dt * th * dv_free_.segment<2>(2 * i);
+    const double gap = ob.normal.dot(model_.ref.col(i) + u_pred - ob.point);
+    // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
+    // engaged contact that separates simply gets R = 0 from the contact law.
+    if (gap < 0.0) engaged_[k] = 1;
+    if (!engaged_[k]) {
+      cs.reaction[k] = {};
+      continue;
+    }
+    const Vec2 v_pred = v1_.segment<2>(2 * i) + dv_free_.segment<2>(2 * i);
+    cs.x_free[k] = position ? LocalPair{gap, ob.tangent().dot(u_pred - u0_.segment<2>(2 * i))}
+                            : LocalPair{ob.normal.dot(v_pred), ob.tangent().dot(v_pred)};
+    const double a_ii = 0.5 / inv_diag_[2 * i] + 0.5 / inv_diag_[2 * i + 1];
+    cs.weight[k] = c * dt / a_ii;  // local compliance estimate: exact when A is diagonal
+    cs.active.push_back(k);
+  }
+  if (cs.active.empty()) {
+    impulse_.setZero();
+    y_.setZero();
+    cs.sweeps = 0;
+    return true;
+  }
+  cs.converged = direct_ ? false : uzawa_contact(c);
+  if (!cs.converged && !exact_contact(c)) {
+    ++cs.unconverged_steps;
+    failure_ = "contact did not converge in " + std::to_string(run_.contact.max_sweeps) + " Gauss-Seidel sweeps";
+    return false;
+  }
+  return true;
+}
+
+void ImplicitIntegrator::build_impulse() {
+  impulse_.setZero();
+  for (int k : contact_.active) {
+    const LineObstacle& ob = run_.obstacles[contact_.candidates[k].obstacle];
+    impulse_.segment<2>(2 * contact_.candidates[k].node) +=
+        contact_.reaction[k].n * ob.normal + contact_.reaction[k].t * ob.tangent();
+  }
+}
+
+// Uzawa sweeps: x(R) exact through one solve of A per sweep, rho = omega / w with w the
+// diagonal estimate of the local compliance; omega halves whenever the largest reaction
+// change grows. Fast when A is mass-dominated (W nearly diagonal).
+bool ImplicitIntegrator::uzawa_contact(double c) {
+  ContactState& cs = contact_;
+  const double dt = s_.dt;
+  double omega = 1.0, last_change = 1e300;
+  for (cs.sweeps = 1; cs.sweeps <= set_.uzawa_sweeps; ++cs.sweeps) {
+    build_impulse();
+    rhs_ = dt * impulse_;
+    if (!solve(rhs_, y_)) return false;
+    double change = 0.0, size = 0.0;
+    for (int k : cs.active) {
+      const ContactCandidate& cc = cs.candidates[k];
+      const LineObstacle& ob = run_.obstacles[cc.obstacle];
+      const Vec2 yi = y_.segment<2>(2 * cc.node);
+      const LocalPair x{cs.x_free[k].n + c * ob.normal.dot(yi), cs.x_free[k].t + c * ob.tangent().dot(yi)};
+      const double rho = omega / cs.weight[k];
+      LocalPair& r = cs.reaction[k];
+      const LocalPair next = project_coulomb(
+          {r.n - rho * (x.n + cc.friction_coeff * std::abs(x.t)), r.t - rho * x.t}, cc.friction_coeff);
+      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
+      size = std::max(size, std::hypot(next.n, next.t));
+      r = next;
+    }
+    if (change <= run_.contact.tolerance * size || change == 0.0) {
+      build_impulse();
+      rhs_ = dt * impulse_;
+      return solve(rhs_, y_);
+    }
+    if (change > last_change) omega *= 0.5;
+    last_change = change;
+  }
+  return false;
+}
+
+// The condensed problem with the exact W = c dt H A^-1 H^T, built from one column solve per
+// active contact direction, then Gauss-Seidel over the contacts with each contact's local
+// problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
+// combination of the same columns.
+bool ImplicitIntegrator::exact_contact(double c) {
+  ContactState& cs = contact_;
+  const double dt = s_.dt;
+  const int dirs = cs.any_friction ? 2 : 1;
+  const int m = dirs * static_cast<int>(cs.active.size());
+  ++exact_contact_solves_;
+  auto direction = [&](int a) -> Vec2 {
+    const LineObstacle& ob = run_.obstacles[cs.candidates[cs.active[a / dirs]].obstacle];
+    return a % dirs == 0 ? ob.normal : ob.tangent();
+  };
+  for (int a = 0; a < m; ++a) {
+    rhs_.setZero();
+    rhs_.segment<2>(2 * cs.candidates[cs.active[a / dirs]].node) = direction(a);
+    y_.setZero();
+    if (!solve(rhs_, y_)) return false;
+    columns_.col(a) = y_;
+  }
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b)
+      w_(a, b) = c * dt * direction(a).dot(columns_.col(b).segment<2>(2 * cs.candidates[cs.active[a / dirs]].node));
+
+  const double tol = run_.contact.tolerance;
+  for (cs.sweeps = 1; cs.sweeps <= run_.contact.max_sweeps; ++cs.sweeps) {
+    double change = 0.0, size = 0.0;
+    for (int i = 0; i < static_cast<int>(cs.active.size()); ++i) {
+      const int k = cs.active[i];
+      const double mu = cs.candidates[k].friction_coeff;
+      LocalPair& r = cs.reaction[k];
+      // x = x_base + W_kk r, x_base = x_free + sum over the other contacts.
+      LocalPair base = cs.x_free[k];
+      for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
+        if (j == i) continue;
+        const LocalPair rj = cs.reaction[cs.active[j]];
+        base.n += w_(dirs * i, dirs * j) * rj.n + (dirs == 2 ? w_(dirs * i, dirs * j + 1) * rj.t : 0.0);
+        if (dirs == 2) base.t += w_(dirs * i + 1, dirs * j) * rj.n + w_(dirs * i + 1, dirs * j + 1) * rj.t;
+      }
+      LocalPair next;
+      if (dirs == 1) {
+        next = {std::max(0.0, -base.n / w_(i, i)), 0.0};
+      } else {
+        const double wnn = w_(2 * i, 2 * i), wnt = w_(2 * i, 2 * i + 1), wtn = w_(2 * i + 1, 2 * i),
+                     wtt = w_(2 * i + 1, 2 * i + 1);
+        const double rho = 1.0 / std::max(wnn, wtt);
+        next = r;
+        for (int it = 0; it < 200; ++it) {
+          const LocalPair x{base.n + wnn * next.n + wnt * next.t, base.t + wtn * next.n + wtt * next.t};
+          const LocalPair upd = project_coulomb({next.n - rho * (x.n + mu * std::abs(x.t)), next.t - rho * x.t}, mu);
+          const double d = std::hypot(upd.n - next.n, upd.t - next.t);
+          next = upd;
+          if (d <= 1e-3 * tol * std::hypot(upd.n, upd.t) || d == 0.0) break;
+        }
+      }
+      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
+      size = std::max(size, std::hypot(next.n, next.t));
+      r = next;
+    }
+    if (change <= tol * size || change == 0.0) {
+      for (int a = 0; a < m; ++a) {
+        const LocalPair r = cs.reaction[cs.active[a / dirs]];
+        r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
+      }
+      y_.noalias() = columns_.leftCols(m) * r_vec_.head(m);
+      build_impulse();
+      return true;
+    }
+  }
+  return false;
+}
+
+bool ImplicitIntegrator::step(bool with_energy) {
+  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
+  u0_ = s_.u;
+  v0_ = s_.v_half;
+  f0_ = s_.f_int;
+  const double hourglass_power0 = s_.forces.hourglass_power;
+  const double t1 = s_.time + dt;
+  // Predictor: where the step resolves the dynamics (dt <= critical_dt), linear extrapolation of
+  // the velocity, v1 = 2 v0 - v_{-1}; otherwise (and at the first step) v1 = v0.
+  if (s_.step > 0 && dt <= model_.critical_dt)
+    v1_ = 2.0 * v0_ - v_prev_;
+  else
+    v1_ = v0_;
+  for (const auto& p : run_.prescribed)
+    v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
+                     ? p.value
+                     : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+  impulse_.setZero();
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
+    const LineObstacle& ob = run_.obstacles[contact_.candidates[k].obstacle];
+    impulse_.segment<2>(2 * contact_.candidates[k].node) +=
+        contact_.reaction[k].n * ob.normal + contact_.reaction[k].t * ob.tangent();
+  }
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
+  residuals_.clear();
+  int sweeps = 0;
+  double r = residual(false);
+  for (int it = 0;; ++it) {
+    if (!std::isfinite(r)) {
+      failure_ = "non-finite Newton residual at iteration " + std::to_string(it);
+      return false;
+    }
+    residuals_.push_back(r);
+    // With contact candidates at least one iteration runs: the contact law is only imposed
+    // inside an iteration, and a free iterate can have a zero residual (a rigid translation).
+    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty())) break;
+    if (it == set_.max_newton_iterations) {
+      failure_ = "Newton did not converge in " + std::to_string(it) + " iterations (relative residual " +
+                 std::to_string(r) + ")";
+      return false;
+    }
+    ++newton_total_;
+    assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_,
+                    f1_.data(), false);
+    constrain_matrix();
+    if (direct_ && !factorize()) return false;
+    rhs_ = -(g_ + dt * impulse_);  // the residual without the contact reactions
+    dv_free_.setZero();
+    if (!solve(rhs_, dv_free_)) return false;
+    if (!contact_.candidates.empty()) {
+      if (!solve_contact()) return false;
+      sweeps = std::max(sweeps, contact_.sweeps);
+    } else {
+      y_.setZero();
+    }
+    // Backtracking: the full Newton update unless it inverts an element or is not finite
+    // (large steps on coarse stiff problems); then halve it, up to 10 times.
+    dv_free_ += y_;
+    v_base_ = v1_;
+    double alpha = 1.0;
+    for (int ls = 0;; ++ls) {
+      v1_ = v_base_ + alpha * dv_free_;
+      r = residual(false);
+      if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
+      alpha *= 0.5;
+    }
+  }
+  if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
+
+  // Bookkeeping of the converged step: reactions at prescribed DOFs (R = G_unconstrained/dt),
+  // contact work R.du and slip work, viscous hourglass work (same xi-average as the forces).
+  for (const auto& p : run_.prescribed)
+    s_.reaction_work += prescribed_v_[p.dof] / dt * (u1_[p.dof] - u0_[p.dof]);
+  s_.hourglass_dissipation += dt * (xi * s_.forces.hourglass_power + (1.0 - xi) * hourglass_power0);
+  ContactState& cs = contact_;
+  cs.active_count = cs.stick_count = cs.slip_count = 0;
+  cs.normal_force = cs.tangential_force = 0.0;
+  for (std::size_t k = 0; k < cs.candidates.size(); ++k) {
+    const LocalPair r = cs.reaction[k];
+    if (!(r.n > 0.0)) {
+      cs.status[k] = ContactStatus::open;
+      continue;
+    }
+    const ContactCandidate& cc = cs.candidates[k];
+    const LineObstacle& ob = run_.obstacles[cc.obstacle];
+    const Vec2 du = u1_.segment<2>(2 * cc.node) - u0_.segment<2>(2 * cc.node);
+    cs.contact_work += (r.n * ob.normal + r.t * ob.tangent()).dot(du);
+    cs.friction_dissipation -= r.t * ob.tangent().dot(du);
+    cs.status[k] = classify(r, cc.friction_coeff);
+    ++cs.active_count;
+    cs.stick_count += cs.status[k] == ContactStatus::stick;
+    cs.slip_count += cs.status[k] == ContactStatus::slip;
+    cs.normal_force += r.n;
+    cs.tangential_force += r.t;
+  }
+  cs.sweeps = sweeps;
+  if (cs.active_count > 0) {
+    ++cs.steps_with_contact;
+    cs.sweeps_total += sweeps;
+    cs.sweeps_max = std::max(cs.sweeps_max, sweeps);
+  }
+  v_prev_ = v0_;
+  s_.u = u1_;
+  s_.v_half = v1_;
+  s_.f_int = f1_;
+  ++s_.step;
+  s_.time = static_cast<double>(s_.step) * dt;
+  return true;
+}
+
+RunResult run_implicit(const Model& model, const RunSettings& settings, const ImplicitSettings& implicit,
+                       const ProgressFn& progress) {
+  RunResult result;
+  ImplicitIntegrator integrator(model, settings, implicit);
+  const State& s = integrator.state();
+  const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
+  const bool with_contact = !integrator.contact().candidates.empty();
+  RunMonitor monitor(model, settings, result, with_contact ? &integrator.contact().candidates : nullptr);
+  const long planned = monitor.planned_steps();
+  for (;;) {
+    const long n = s.step;
+    if (monitor.is_monitor_step(n)) {
+      if (!monitor.observe(s, integrator.contact_report(), kinetic0)) break;
+      if (progress) progress(n, planned, s.time);
+    }
+    if (n == planned) break;
+    if (!integrator.step(monitor.is_monitor_step(n + 1))) {
+      monitor.diverge(s, integrator.failure());
+      break;
+    }
+    if (!(s.forces.min_jacobian > 0.0)) {
+      monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
+      break;
+    }
+  }
+  monitor.finish(s);
+  copy_contact_totals(integrator.contact(), result);
+  result.newton_iterations = integrator.newton_iterations_total();
+  result.linear_iterations = integrator.linear_iterations_total();
+  return result;
+}
+
+}  // namespace ricochet

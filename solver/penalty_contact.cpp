@@ -1,0 +1,213 @@
+#include "solver/penalty_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+#include <type_traits>
+
+namespace ricochet {
+
+double penalty_bulk_modulus(const Material& material) {
+  return std::visit(
+      [](const auto& m) {
+        using T = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<T, StVenantKirchhoff>) {
+          return m.lambda_3d + 2.0 * m.shear_modulus / 3.0;
+        } else {
+          return m.lambda + 2.0 * m.shear_modulus / 3.0;  // NeoHookean::lambda is the 3D value
+        }
+      },
+      material);
+}
+
+namespace {
+
+// A cell edge (a < b) and the reference area of the cell using it.
+struct Edge {
+  int a, b;
+  double cell_area;
+};
+
+template <class Block>
+void collect_edges(const Model& model, const std::vector<Block>& blocks, int body,
+                   std::vector<Edge>& edges) {
+  for (const auto& block : blocks) {
+    if (block.body != body) continue;
+    for (const auto& c : block.conn) {
+      const int n = static_cast<int>(c.size());
+      double twice_area = 0.0;
+      for (int k = 0; k < n; ++k) {
+        const Vec2 p = model.ref.col(c[k]), q = model.ref.col(c[(k + 1) % n]);
+        twice_area += p.x() * q.y() - q.x() * p.y();
+      }
+      for (int k = 0; k < n; ++k) {
+        const int a = c[k], b = c[(k + 1) % n];
+        edges.push_back({std::min(a, b), std::max(a, b), 0.5 * twice_area});
+      }
+    }
+  }
+}
+
+// Per node of the model: k_i / f_si = sum over its boundary segments of K l^2 e / (2 A_c).
+std::vector<double> nodal_stiffness_per_scale(const Model& model) {
+  std::vector<double> k(model.num_nodes(), 0.0);
+  std::vector<Edge> edges;
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    const BodyInfo& body = model.bodies[b];
+    const double bulk = penalty_bulk_modulus(body.material);
+    edges.clear();
+    collect_edges(model, model.q4_full, b, edges);
+    collect_edges(model, model.q4_hourglass, b, edges);
+    collect_edges(model, model.t3, b, edges);
+    std::sort(edges.begin(), edges.end(),
+              [](const Edge& x, const Edge& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+    for (std::size_t i = 0; i < edges.size();) {
+      std::size_t j = i;
+      while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
+      if (j - i == 1) {
+        const Edge& e = edges[i];
+        const double l2 = (model.ref.col(e.b) - model.ref.col(e.a)).squaredNorm();
+        const double ks = bulk * l2 * body.thickness / e.cell_area;
+        k[e.a] += 0.5 * ks;
+        k[e.b] += 0.5 * ks;
+      }
+      i = j;
+    }
+  }
+  return k;
+}
+
+}  // namespace
+
+PenaltyState make_penalty_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+                                const std::vector<std::vector<double>>& friction,
+                                const std::vector<PrescribedDof>& prescribed,
+                                const PenaltySettings& settings) {
+  if (!(settings.scale_factor > 0.0))
+    throw std::invalid_argument("penalty contact: scale factor f_si must be > 0");
+  // The candidates, exactly as the bi-potential phase chooses them.
+  const ContactState c = make_contact_state(model, obstacles, friction, prescribed);
+  PenaltyState p;
+  p.candidates = c.candidates;
+  p.any_friction = c.any_friction;
+  p.scale_factor = settings.scale_factor;
+  const std::vector<double> k_node = nodal_stiffness_per_scale(model);
+  const std::size_t n = p.candidates.size();
+  p.stiffness.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.stiffness[i] = settings.scale_factor * k_node[p.candidates[i].node];
+    if (!(p.stiffness[i] > 0.0))
+      throw std::logic_error("penalty contact: boundary node " +
+                             std::to_string(p.candidates[i].node) + " has no boundary segment");
+  }
+  p.force_n.assign(n, 0.0);
+  p.force_t.assign(n, 0.0);
+  p.last_slip.assign(n, 0.0);
+  p.status.assign(n, ContactStatus::open);
+  p.active.reserve(n);
+  return p;
+}
+
+double penalty_critical_dt(const Model& model, const PenaltyState& p) {
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < p.candidates.size(); ++i)
+    dt = std::min(dt, 2.0 * std::sqrt(model.mass[2 * p.candidates[i].node] / p.stiffness[i]));
+  return dt;
+}
+
+double penalty_combined_critical_dt(const Model& model, const PenaltyState& p) {
+  const double de = model.critical_dt, dp = penalty_critical_dt(model, p);
+  if (!std::isfinite(dp)) return de;
+  return 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp));
+}
+
+double penalty_stable_time_step(const Model& model, const PenaltyState& p, double safety) {
+  return safety * penalty_combined_critical_dt(model, p);
+}
+
+void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+                   PenaltyState& p, State& s) {
+  const int count = static_cast<int>(p.candidates.size());
+  p.active.clear();
+  p.active_count = p.stick_count = p.slip_count = 0;
+  p.normal_force = p.tangential_force = 0.0;
+  p.normal_energy = p.tangential_energy = 0.0;
+  double depth = 0.0;
+  const bool first = !p.initialized;
+  p.initialized = true;
+
+  for (int k = 0; k < count; ++k) {
+    const ContactCandidate& cc = p.candidates[k];
+    const LineObstacle& ob = obstacles[cc.obstacle];
+    const int i = cc.node;
+    const Vec2 x = model.ref.col(i) + s.u.segment<2>(2 * i);
+    const double g = ob.normal.dot(x - ob.point);
+    const double stiff = p.stiffness[k];
+    const double fn = g < 0.0 ? -stiff * g : 0.0;
+    double ft = 0.0;
+    ContactStatus status = fn > 0.0 ? ContactStatus::slip : ContactStatus::open;
+    if (cc.friction_coeff > 0.0) {
+      // Elastic predictor on the slip increment of the step, then the return map onto
+      // |f_t| <= mu f_n (f_n = 0 when open, which returns the spring to zero).
+      const double slip = ob.tangent().dot(x);
+      const double ds = first ? 0.0 : slip - p.last_slip[k];
+      p.last_slip[k] = slip;
+      const double old = p.force_t[k];
+      const double trial = old - stiff * ds;
+      const double cap = cc.friction_coeff * fn;
+      if (std::abs(trial) <= cap) {
+        ft = trial;
+        if (fn > 0.0) status = ContactStatus::stick;
+      } else {
+        ft = std::copysign(cap, trial);
+        p.friction_dissipation += (trial - ft) * (old + ft) / (2.0 * stiff);
+      }
+      p.force_t[k] = ft;
+    }
+    p.force_n[k] = fn;
+    p.status[k] = status;
+    if (!(fn > 0.0)) continue;
+
+    depth = std::max(depth, -g);
+    p.active.push_back(k);
+    s.a.segment<2>(2 * i) += (fn * ob.normal + ft * ob.tangent()) * model.inv_mass[2 * i];
+    p.normal_force += fn;
+    p.tangential_force += ft;
+    p.normal_energy += 0.5 * stiff * g * g;
+    p.tangential_energy += ft * ft / (2.0 * stiff);
+    p.stick_count += status == ContactStatus::stick;
+    p.slip_count += status == ContactStatus::slip;
+  }
+  p.active_count = static_cast<int>(p.active.size());
+  p.stored_energy = p.normal_energy + p.tangential_energy;
+  p.penetration = depth;
+  p.penetration_max = std::max(p.penetration_max, depth);
+  if (p.active.empty()) return;
+  ++p.steps_with_contact;
+
+  // Work of the penalty forces, dt F . v_n with v_n = v_{n-1/2} + dt/2 a_n and the final a_n:
+  // the change of the half-step kinetic energy that F causes (as contact_phase records it).
+  const double dt = s.dt;
+  for (int k : p.active) {
+    const ContactCandidate& cc = p.candidates[k];
+    const LineObstacle& ob = obstacles[cc.obstacle];
+    const int i = cc.node;
+    const Vec2 v_mid = s.v_half.segment<2>(2 * i) + 0.5 * dt * s.a.segment<2>(2 * i);
+    p.contact_work += dt * (p.force_n[k] * ob.normal + p.force_t[k] * ob.tangent()).dot(v_mid);
+  }
+}
+
+double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
+                   const PenaltyState& p, const Eigen::VectorXd& u) {
+  double depth = 0.0;
+  for (const ContactCandidate& cc : p.candidates) {
+    const LineObstacle& ob = obstacles[cc.obstacle];
+    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
+    depth = std::max(depth, -ob.normal.dot(x - ob.point));
+  }
+  return depth;
+}
+
+}  // namespace ricochet

@@ -1,0 +1,123 @@
+// Explicit penalty contact of body nodes with rigid obstacles, LS-DYNA style (literature 3.1,
+// the paper's comparison scheme). It plugs in where the bi-potential contact_phase() does:
+// after evaluate() gives the free accelerations at t_n, penalty_phase() adds the forces of
+// springs acting on the candidate nodes that lie behind an obstacle at u_n, and update()
+// integrates them like any other force. No contact condition is enforced: the penalty lets a
+// node penetrate until its spring balances the impact.
+//
+// Stiffness (2D form of LS-DYNA's SOFT = 0 rule k = f_si K A^2 / V, literature 3.1):
+//   every boundary segment s (a cell edge used by exactly one cell) of a body has the
+//   segment stiffness
+//       k_s = f_si K (l_s e)^2 / (A_c e) = f_si K l_s^2 e / A_c,
+//   with l_s its reference length, e the body's thickness, A_c the reference area of the
+//   one cell that owns s (so A = l_s e is the segment area and V = A_c e the owning element's
+//   volume). A node receives half the stiffness of each boundary segment it ends:
+//       k_i = sum over the boundary segments s of node i of k_s / 2.
+//   When the node's two segments have the same length l and owning-cell area A_c this is
+//   exactly f_si K A_i^2 / V with A_i = l e the node's tributary boundary area and V = A_c e;
+//   on a uniform grid of h x h cells every boundary node (corners too) gets k = f_si K e.
+//   The share of a segment that does not face the obstacle (a side edge ending at a bottom
+//   corner) is counted as well: the stiffness is a property of the node, as in LS-DYNA's
+//   slave-node option, not of the pair.
+// Bulk modulus K: the 3D value K = lambda + 2 mu / 3 = E / (3 (1 - 2 nu)) of the material's
+// (E, nu), in plane stress and plane strain alike. LS-DYNA takes K from the material card
+// whatever the element formulation (its plane-stress solids, ELFORM 12, included), and the
+// literature's penetration estimate delta / h ~ sigma / (f_si K) uses this K, so f_si keeps its
+// LS-DYNA meaning here. (The plane-stress 2D bulk modulus lambda* + mu = E / (2 (1 - nu)) would
+// be 14 % smaller at nu = 0.3 and stays bounded as nu -> 1/2, where the 3D value diverges.)
+//
+// Forces at t_n, per candidate with g = n . (X + u_n - point):
+//   normal:     f_n = -k g if g < 0, else 0 (pushes along n);
+//   tangential: an elastic spring of the same k on the slip, with a return map:
+//                 f* = f_t,old - k ds, ds = t . (x_n - x_{n-1}) the node's slip increment along
+//                 the obstacle's tangent over the last step,
+//                 f_t = f* if |f*| <= mu f_n (stick), else mu f_n sign(f*) (slip);
+//               an open contact (f_n = 0) returns f_t to 0. mu = 0 skips all of it.
+//   Force on the node: f_n n + f_t t, added to s.a as f / m.
+// Energies: the stored (penalty) energy U = sum over active candidates of
+//   1/2 k g^2 + f_t^2 / (2 k); the friction dissipation of a step is
+//   D = (f* - f_t) (f_t,old + f_t) / (2 k): the returned (plastic) slip (f* - f_t) / k times the
+//   step's mean friction force. With the trapezoidal work W = (f_t,old + f_t) ds / 2 of the
+//   tangential spring this makes U_t + D = -W exactly, step by step (the rule under which the
+//   central-difference kinetic energy changes by the forces' work). On opening the stored
+//   f_t,old^2 / (2 k) goes to D, less the work of the step.
+#pragma once
+
+#include <vector>
+
+#include "solver/contact.hpp"
+
+namespace ricochet {
+
+struct PenaltySettings {
+  double scale_factor = 0.1;  // f_si (LS-DYNA SLSFAC default) [-]
+};
+
+// Preallocated working set, per-step results and run totals of the penalty phase.
+struct PenaltyState {
+  std::vector<ContactCandidate> candidates;  // boundary node x obstacle, less prescribed nodes
+  std::vector<double> stiffness;             // per candidate, k [N/m]
+  std::vector<double> force_n;               // per candidate, f_n of the last step (>= 0) [N]
+  std::vector<double> force_t;               // per candidate, tangential spring force f_t along t [N]
+  std::vector<double> last_slip;             // per candidate, t . x at the last step [m]
+  std::vector<ContactStatus> status;         // per candidate, of the last step
+  std::vector<int> active;                   // candidate indices active in the last step
+  double scale_factor = 0.1;                 // f_si used for `stiffness` [-]
+  bool any_friction = false;
+  bool initialized = false;                  // last_slip holds the previous step's positions
+
+  // Results of the last step (at t_n).
+  int active_count = 0, stick_count = 0, slip_count = 0;
+  double normal_force = 0.0;      // sum f_n [N]
+  double tangential_force = 0.0;  // sum f_t along each obstacle's tangent [N]
+  double penetration = 0.0;       // largest depth -g of any candidate (>= 0) [m]
+  double normal_energy = 0.0;     // sum 1/2 k g^2 over active candidates [J]
+  double tangential_energy = 0.0; // sum f_t^2 / (2 k) [J]
+  double stored_energy = 0.0;     // normal_energy + tangential_energy: the penalty energy [J]
+  // Accumulated over the run.
+  double friction_dissipation = 0.0;  // sum of D (see above) [J]
+  double contact_work = 0.0;          // sum dt F . v_n of the penalty forces on the bodies [J]
+  double penetration_max = 0.0;       // largest `penetration` seen [m]
+  long steps_with_contact = 0;
+};
+
+// Bulk modulus used by the penalty stiffness: the 3D K = lambda + 2 mu / 3 [Pa] (see above).
+double penalty_bulk_modulus(const Material& material);
+
+// Candidates as make_contact_state() builds them (each body's boundary nodes with each
+// obstacle, less nodes with a prescribed DOF; friction[b][o] = mu of body b against obstacle
+// o), with their stiffness k_i from `settings`, and every working array allocated.
+PenaltyState make_penalty_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+                                const std::vector<std::vector<double>>& friction,
+                                const std::vector<PrescribedDof>& prescribed,
+                                const PenaltySettings& settings);
+
+// Largest stable step of the contact springs alone: min over candidates of 2 sqrt(m_i / k_i)
+// (a node mass on a spring to the ground), +infinity without candidates [s].
+double penalty_critical_dt(const Model& model, const PenaltyState& p);
+
+// Critical step of the elements and the springs together [s]:
+//   dt_c = 1 / sqrt(1 / dt_e^2 + 1 / dt_p^2),  dt_e = model.critical_dt, dt_p = penalty_critical_dt.
+// The springs only add stiffness, so omega_max^2 <= omega_e^2 + omega_p^2 (Weyl), and with
+// dt_e and dt_p both bounds dt_c is one too. min(dt_e, dt_p) is not: near dt_e = dt_p the
+// coupled system is up to sqrt(2) faster (see tests/test_penalty_contact.cpp, PenaltyTimeStep).
+double penalty_combined_critical_dt(const Model& model, const PenaltyState& p);
+
+// safety * penalty_combined_critical_dt: the fixed step of a penalty run [s]. Stable is not
+// accurate: when the springs set the step (f_si >~ 3 on square cells), an impact at 0.9 x the
+// springs' limit (omega dt = 1.8) gains 40-100 % energy at the nodes' entry into and exit from
+// their one-sided springs; 0.3-0.7 x brings it to ~1 % (measured, test_penalty_contact.cpp).
+// With the LS-DYNA default f_si = 0.1 the elements set the step and the springs have
+// omega dt ~ 0.35.
+double penalty_stable_time_step(const Model& model, const PenaltyState& p, double safety);
+
+// After evaluate(): the penalty forces of the state at t_n, added to s.a; per-step results and
+// energies updated. Allocates nothing.
+void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+                   PenaltyState& p, State& s);
+
+// Largest depth of any candidate node inside its obstacle at u (>= 0) [m].
+double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
+                   const PenaltyState& p, const Eigen::VectorXd& u);
+
+}  // namespace ricochet

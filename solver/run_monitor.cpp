@@ -1,0 +1,177 @@
+#include "solver/run_monitor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "solver/observers.hpp"
+
+namespace ricochet {
+
+ContactReport report(const ContactState& c) {
+  ContactReport r;
+  r.active = c.active_count;
+  r.stick = c.stick_count;
+  r.slip = c.slip_count;
+  r.iterations = c.sweeps;
+  r.normal_force = c.normal_force;
+  r.tangential_force = c.tangential_force;
+  r.friction_dissipation = c.friction_dissipation;
+  r.contact_work = c.contact_work;
+  return r;
+}
+
+ContactReport report(const PenaltyState& p) {
+  ContactReport r;
+  r.active = p.active_count;
+  r.stick = p.stick_count;
+  r.slip = p.slip_count;
+  r.normal_force = p.normal_force;
+  r.tangential_force = p.tangential_force;
+  r.friction_dissipation = p.friction_dissipation;
+  r.contact_work = p.contact_work;
+  r.contact_energy = p.stored_energy;
+  return r;
+}
+
+namespace {
+
+// Steps at which the history is sampled: k * interval rounded to the nearest step, and the last.
+std::vector<long> sample_steps(const RunSettings& s, long planned) {
+  std::vector<long> steps;
+  if (s.sample_interval <= 0.0) {
+    for (long n = 0; n <= planned; ++n) steps.push_back(n);
+    return steps;
+  }
+  for (long k = 0;; ++k) {
+    const long n = std::lround(static_cast<double>(k) * s.sample_interval / s.dt);
+    if (n > planned) break;
+    if (steps.empty() || n > steps.back()) steps.push_back(n);
+  }
+  if (steps.back() != planned) steps.push_back(planned);
+  return steps;
+}
+
+double penetration_of(const Model& model, const std::vector<LineObstacle>& obstacles,
+                      const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
+  double depth = 0.0;
+  for (const ContactCandidate& cc : candidates) {
+    const LineObstacle& ob = obstacles[cc.obstacle];
+    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
+    depth = std::max(depth, -ob.normal.dot(x - ob.point));
+  }
+  return depth;
+}
+
+}  // namespace
+
+RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
+                       const std::vector<ContactCandidate>* candidates)
+    : model_(model), settings_(settings), result_(result), candidates_(candidates) {
+  if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
+    throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
+  result.dt = settings.dt;
+  planned_ = static_cast<long>(std::ceil(settings.end_time / settings.dt - 1e-9));
+  result.planned_steps = planned_;
+  samples_ = sample_steps(settings, planned_);
+  for (double t : settings.field_times) {
+    const long n = std::lround(t / settings.dt);
+    if (n >= 0 && n <= planned_) field_steps_.push_back(n);  // times after the end are skipped
+  }
+  std::sort(field_steps_.begin(), field_steps_.end());
+  field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
+  result.history.columns = history_columns(settings.probes);
+  result.history.values.reserve(samples_.size() * result.history.columns.size());
+  result.fields.reserve(field_steps_.size());
+  monitor_every_ = std::max(1, settings.monitor_every);
+  cell_vm_.assign(model.num_cells(), 0.0);
+  if (candidates_) result.contact_candidates = static_cast<int>(candidates_->size());
+  wall0_ = std::chrono::steady_clock::now();
+  cpu0_ = std::clock();
+}
+
+bool RunMonitor::is_monitor_step(long n) const {
+  return (next_sample_ < samples_.size() && samples_[next_sample_] == n) ||
+         (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) ||
+         n % monitor_every_ == 0 || n == planned_;
+}
+
+void RunMonitor::diverge(const State& s, std::string reason) {
+  result_.status = RunStatus::diverged;
+  result_.reason = std::move(reason);
+  result_.diverged_step = s.step;
+  result_.diverged_time = s.time;
+}
+
+bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0) {
+  const long n = s.step;
+  if (n == 0) u0_ = s.u;
+  Energies e = observe_energies(model_, s, u0_);
+  e.friction_dissipation = c.friction_dissipation;
+  if (n == 0) result_.initial_energy = kinetic0 + e.strain + e.hourglass + c.contact_energy;
+  reference_energy_ = std::max({reference_energy_, result_.initial_energy, std::abs(e.external_work)});
+  const double total = e.total() + c.contact_energy;
+  if (!std::isfinite(total) || !std::isfinite(e.external_work)) {
+    diverge(s, "non-finite state");
+    return false;
+  }
+  if (reference_energy_ > 0.0 && total > settings_.energy_growth_limit * reference_energy_) {
+    diverge(s, "energy growth: total energy " + std::to_string(total) + " J exceeds " +
+                   std::to_string(settings_.energy_growth_limit) + " x reference " +
+                   std::to_string(reference_energy_) + " J");
+    return false;
+  }
+  // The balance counts the stored contact (penalty) energy with the bodies' energies.
+  Energies balance = e;
+  balance.strain += c.contact_energy;
+  const double error = energy_error(balance, result_.initial_energy, reference_energy_);
+
+  if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
+    cell_von_mises(model_, s.u.data(), cell_vm_.data());
+    const double vm = cell_vm_.empty() ? 0.0 : *std::max_element(cell_vm_.begin(), cell_vm_.end());
+    const double depth = candidates_ ? penetration_of(model_, settings_.obstacles, *candidates_, s.u) : 0.0;
+    const Vec2 p = linear_momentum(model_, s);
+    auto& v = result_.history.values;
+    v.insert(v.end(), {s.time, e.kinetic, e.strain, e.hourglass, e.external_work,
+                       e.friction_dissipation, e.total(), error, p.x(), p.y(), vm, depth,
+                       static_cast<double>(c.active), c.normal_force, c.tangential_force,
+                       c.contact_work, static_cast<double>(c.stick), static_cast<double>(c.slip),
+                       static_cast<double>(c.iterations), c.contact_energy});
+    for (const auto& pr : settings_.probes) {
+      const int d = 2 * pr.node;
+      v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});
+    }
+    result_.energy_error_max = std::max(result_.energy_error_max, error);
+    result_.penetration_max = std::max(result_.penetration_max, depth);
+    if (vm > result_.von_mises_max) {
+      result_.von_mises_max = vm;
+      result_.von_mises_max_time = s.time;
+    }
+    ++next_sample_;
+  }
+  if (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) {
+    FieldSnapshot f;
+    f.step = n;
+    f.time = s.time;
+    f.u = s.u;
+    f.v.resize(s.u.size());
+    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+    f.von_mises.resize(cell_vm_.size());
+    cell_von_mises(model_, s.u.data(), f.von_mises.data());
+    result_.fields.push_back(std::move(f));
+    ++next_field_;
+  }
+  return true;
+}
+
+void RunMonitor::finish(const State& s) {
+  result_.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  result_.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
+  result_.steps = s.step;
+  result_.end_time = s.time;
+  if (result_.wall_seconds > 0.0)
+    result_.element_steps_per_second =
+        static_cast<double>(model_.num_cells()) * static_cast<double>(s.step) / result_.wall_seconds;
+}
+
+}  // namespace ricochet

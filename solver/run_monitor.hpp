@@ -1,0 +1,61 @@
+// What every scheme's time loop shares: the sampling schedule, the observers at monitor
+// steps, divergence checks, history rows and field snapshots, timing. A scheme loop calls
+// is_monitor_step(n) to know whether to compute energies, then observe(...) at those steps.
+#pragma once
+
+#include <chrono>
+#include <ctime>
+#include <vector>
+
+#include "solver/run.hpp"
+
+namespace ricochet {
+
+// Contact results of the last step and accumulated contact energies, whatever the scheme.
+struct ContactReport {
+  int active = 0, stick = 0, slip = 0, iterations = 0;
+  double normal_force = 0.0, tangential_force = 0.0;  // [N]
+  double friction_dissipation = 0.0;  // [J], accumulated
+  double contact_work = 0.0;          // [J], accumulated
+  double contact_energy = 0.0;        // stored penalty energy [J], now
+};
+
+ContactReport report(const ContactState& c);
+ContactReport report(const PenaltyState& p);
+
+class RunMonitor {
+ public:
+  // `candidates` are the node-obstacle pairs whose penetration is measured (may be empty).
+  RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
+             const std::vector<ContactCandidate>* candidates);
+
+  long planned_steps() const { return planned_; }
+  bool is_monitor_step(long n) const;
+
+  // At a monitor step: energies from s (after an evaluate with energy), divergence checks,
+  // the history row and field snapshot when scheduled. Returns false if the run diverged.
+  // `kinetic0` is the kinetic energy of the initial conditions (used at n = 0).
+  bool observe(const State& s, const ContactReport& c, double kinetic0);
+
+  // Records a divergence found by the scheme itself (e.g. det F <= 0, a failed solve).
+  void diverge(const State& s, std::string reason);
+
+  void finish(const State& s);
+
+ private:
+  const Model& model_;
+  const RunSettings& settings_;
+  RunResult& result_;
+  const std::vector<ContactCandidate>* candidates_;
+  long planned_ = 0;
+  std::vector<long> samples_, field_steps_;
+  std::size_t next_sample_ = 0, next_field_ = 0;
+  long monitor_every_ = 1;
+  Eigen::VectorXd u0_;
+  double reference_energy_ = 0.0;
+  std::vector<double> cell_vm_;
+  std::chrono::steady_clock::time_point wall0_;
+  std::clock_t cpu0_;
+};
+
+}  // namespace ricochet
