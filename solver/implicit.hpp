@@ -22,10 +22,12 @@
 namespace ricochet {
 
 enum class LinearSolverKind {
-  automatic,  // ldlt when dt > critical_dt (stiffness-dominated), pcg otherwise (mass-dominated)
+  automatic,  // see below
   pcg,        // Jacobi-preconditioned CG
   ldlt,       // sparse LDL^T (Eigen SimplicialLDLT, AMD ordering; symbolic analysis once)
 };
+// automatic: pcg up to dt = 3 critical_dt, ldlt beyond; a pcg solve that fails (indefinite
+// matrix of a far-off iterate) switches the run to ldlt.
 
 struct ImplicitSettings {
   double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
@@ -67,6 +69,7 @@ class ImplicitIntegrator {
   bool uzawa_contact(double c);        // true if it converged
   bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel
   bool factorize();
+  void use_direct();
   void build_impulse();
   void constrain_matrix();
 
@@ -95,6 +98,7 @@ class ImplicitIntegrator {
   long newton_total_ = 0, linear_total_ = 0;
   long exact_contact_solves_ = 0;
   long shifted_iterations_ = 0;
+  long solver_switches_ = 0;
 };
 
 RunResult run_implicit(const Model& model, const RunSettings& settings,

@@ -4,10 +4,11 @@
 //   OutOfPlane out_of_plane(F) the out-of-plane stretch F33 [-] and 2nd Piola-Kirchhoff S33 [Pa]
 //   double wave_speed()        small-strain in-plane dilatational wave speed c_p [m/s]
 //   double density             reference mass density rho [kg/m^3]
-//   Matrix4d tangent(F)         A = dP/dF, the consistent tangent of the (reduced) law [Pa],
-//                               indexed A(2*i + J, 2*k + L) = dP_iJ / dF_kL (i, k spatial and
-//                               J, L material indices in 0..1). Hyperelastic, so A = A^T.
-//   first_piola_and_tangent(F, P, A)   both in one pass (P bitwise as first_piola computes it)
+//   Matrix4d tangent(F)        A = dP/dF, the consistent tangent of the (reduced) law [Pa],
+//                              indexed A(2*i + J, 2*k + L) = dP_iJ / dF_kL (i, k spatial and
+//                              J, L material indices in 0..1). Hyperelastic, so A = A^T.
+//   first_piola_and_tangent(F, P, A)  P and A in one pass (for assembly); P equals
+//                              first_piola(F) up to round-off (written out in scalars, a few ulps)
 // F is the in-plane 2x2 deformation gradient. Plane strain fixes F33 = 1; plane stress
 // eliminates F33 by S33 = 0, so W and P are the reduced 2D functions (P stays exactly dW/dF)
 // and A includes the dependence of the eliminated F33 on F.
@@ -55,9 +56,12 @@ struct StVenantKirchhoff {
     return F * S;
   }
   // A_ik(J, L) = delta_ik S_JL + lambda F_iJ F_kL + mu (b_ik delta_JL + F_iL F_kJ), b = F F^T.
-  // With f = (F00, F01, F10, F11) (index 2i + J): mu F_iL F_kJ is mu f f^T except at the
-  // entries (0,3), (1,2) (and mirrors), where it differs by -mu det F, +mu det F.
-  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const {
+  // With f = (F00, F01, F10, F11) = (a, b, c, d) (index 2i + J): mu F_iL F_kJ is mu f f^T
+  // except at the entries (0,3), (1,2) (and mirrors), where it differs by -mu det F, +mu det F.
+  // Written out in scalars: Eigen's 2x2 temporaries make GCC store F and P piecewise and reload
+  // them as vectors (store-forwarding stalls), which cost 25 % of the assembly time.
+  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P,
+                                                   Eigen::Matrix4d& A) const {
     const double a = F(0, 0), b = F(0, 1), c = F(1, 0), d = F(1, 1);
     const double mu = shear_modulus;
     // E = (F^T F - I)/2, S = lambda tr(E) I + 2 mu E, P = F S.
@@ -129,7 +133,8 @@ struct NeoHookean {
   // s' = ds/d(ln J2) = -lambda / (mu e^s + lambda/2) in plane stress (implicit function of
   // S33 = 0) and 0 in plane strain. With g = (G00, G01, G10, G11) (index 2i + J), G_iL G_kJ is
   // g g^T except at the entries (0,3), (1,2) (and mirrors), where it differs by -det G, +det G.
-  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const {
+  EIGEN_ALWAYS_INLINE void first_piola_and_tangent(const Mat2& F, Mat2& P,
+                                                   Eigen::Matrix4d& A) const {
     const double j2 = F.determinant();
     const double log_j2 = std::log(j2);
     const double s = log_c33(log_j2);

@@ -28,7 +28,9 @@ PcgResult Pcg::solve(const SparseMatrixR& A, const Eigen::VectorXd& inv_diag, co
   double rz = r_.dot(z_);
   while (r_norm > tol * b_norm && res.iterations < max_iterations) {
     q_.noalias() = A * p_;
-    const double alpha = rz / p_.dot(q_);
+    const double pq = p_.dot(q_);
+    if (!(pq > 0.0)) break;  // not positive definite along p: report not converged
+    const double alpha = rz / pq;
     x += alpha * p_;
     r_ -= alpha * q_;
     r_norm = r_.norm();

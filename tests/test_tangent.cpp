@@ -433,7 +433,8 @@ TEST(Tangent, ForcesAndTotalsEqualInternalForces) {
         SystemMatrix s = make_system_matrix(model);
         Eigen::VectorXd f_ref(n), f(n);
         f.setConstant(1e300);  // overwritten, not accumulated
-        const ForceTotals tr = internal_forces(model, u.data(), v.data(), f_ref.data(), with_energy);
+        const ForceTotals tr =
+            internal_forces(model, u.data(), v.data(), f_ref.data(), with_energy);
         const ForceTotals t =
             assemble_system(model, u.data(), v.data(), 1.0, 0.5, 0.25, s, f.data(), with_energy);
         const double scale = f_ref.lpNorm<Eigen::Infinity>();
