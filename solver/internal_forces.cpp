@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "solver/kinematics.hpp"
+
 namespace ricochet {
 namespace {
 
@@ -30,7 +32,7 @@ void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, For
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const T3Geom& g = b.geom[e];
     const Grad3 ue = gather<3>(u, b.conn[e]);
-    const Mat2 F = Mat2::Identity() + ue.transpose() * g.dndx;
+    const Mat2 F = deformation_gradient<3>(ue, g.dndx);
     min_j = std::min(min_j, F.determinant());
     const Mat2 P = mat.first_piola(F);
     scatter<3>(f, b.conn[e], g.vol * g.dndx * P.transpose());
@@ -48,7 +50,7 @@ void q4_full_forces(const Q4FullBlock& b, const Mat& mat, const double* u, doubl
     const Grad4 ue = gather<4>(u, b.conn[e]);
     Grad4 fe = Grad4::Zero();
     for (int q = 0; q < 4; ++q) {
-      const Mat2 F = Mat2::Identity() + ue.transpose() * g.dndx[q];
+      const Mat2 F = deformation_gradient<4>(ue, g.dndx[q]);
       min_j = std::min(min_j, F.determinant());
       fe.noalias() += g.vol[q] * g.dndx[q] * mat.first_piola(F).transpose();
       if constexpr (kEnergy) energy += g.vol[q] * mat.energy_density(F);
@@ -67,7 +69,7 @@ void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& mat, const double
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const Q4HourglassGeom& g = b.geom[e];
     const Grad4 ue = gather<4>(u, b.conn[e]);
-    const Mat2 F = Mat2::Identity() + ue.transpose() * g.dndx;
+    const Mat2 F = deformation_gradient<4>(ue, g.dndx);
     min_j = std::min(min_j, F.determinant());
     Grad4 fe = g.vol * g.dndx * mat.first_piola(F).transpose();
     if constexpr (kViscous) {
@@ -122,7 +124,7 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
 void cell_von_mises(const Model& model, const double* u, double* out) {
   for (const auto& b : model.q4_hourglass)
     for (std::size_t e = 0; e < b.conn.size(); ++e) {
-      const Mat2 F = Mat2::Identity() + gather<4>(u, b.conn[e]).transpose() * b.geom[e].dndx;
+      const Mat2 F = deformation_gradient<4>(gather<4>(u, b.conn[e]), b.geom[e].dndx);
       out[b.first_cell + e] = von_mises(b.material, F);
     }
   for (const auto& b : model.q4_full)
@@ -130,12 +132,12 @@ void cell_von_mises(const Model& model, const double* u, double* out) {
       const Grad4 ue = gather<4>(u, b.conn[e]);
       double vm = 0.0;
       for (int q = 0; q < 4; ++q)
-        vm = std::max(vm, von_mises(b.material, Mat2::Identity() + ue.transpose() * b.geom[e].dndx[q]));
+        vm = std::max(vm, von_mises(b.material, deformation_gradient<4>(ue, b.geom[e].dndx[q])));
       out[b.first_cell + e] = vm;
     }
   for (const auto& b : model.t3)
     for (std::size_t e = 0; e < b.conn.size(); ++e) {
-      const Mat2 F = Mat2::Identity() + gather<3>(u, b.conn[e]).transpose() * b.geom[e].dndx;
+      const Mat2 F = deformation_gradient<3>(gather<3>(u, b.conn[e]), b.geom[e].dndx);
       out[b.first_cell + e] = von_mises(b.material, F);
     }
 }

@@ -1,5 +1,7 @@
 #include "solver/tangent.hpp"
 
+#include "solver/kinematics.hpp"
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -73,22 +75,6 @@ inline void scatter_matrix(double* val, const int* slot, const ElementMatrix<N>&
       val[r1[2 * K + 1]] += k.yy(I, K);
     }
   }
-}
-
-// F = I + ue^T dN as columns F.col(J) = e_J + sum_I ue.row(I)^T dN(I, J): 2-wide FMAs that stay
-// in registers. (internal_forces' Eigen form `I + ue^T dN` makes GCC 12 store the four dot
-// products separately and reload them as vectors: a store-forwarding stall costing ~25 % here.)
-// The summation order differs, so F, P and f_int agree with internal_forces to round-off only.
-template <int N>
-EIGEN_ALWAYS_INLINE Mat2 deformation_gradient(const Eigen::Matrix<double, N, 2>& ue,
-                                              const Eigen::Matrix<double, N, 2>& dn) {
-  Mat2 F = Mat2::Identity();
-  for (int I = 0; I < N; ++I) {
-    const Vec2 uI = ue.row(I).transpose();
-    F.col(0) += uI * dn(I, 0);
-    F.col(1) += uI * dn(I, 1);
-  }
-  return F;
 }
 
 struct Context {

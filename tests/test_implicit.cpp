@@ -230,5 +230,38 @@ TEST(Explore, Amp) {
     std::printf("amp %.2f f %.0f: %s steps %ld errmax %.3e final %.3e maxup %.3e\n", amp, f, r.status == RunStatus::ok ? "ok" : r.reason.c_str(), r.steps, r.energy_error_max, h.at(h.rows()-1, h.column("energy_error")), maxup / r.initial_energy);
   }
 }
+TEST(Explore, BarAmp) {
+  const Mesh mesh = grid_mesh(2.0, 0.1, 40, 2, 0.0, false);
+  const Model model = single_body_model(mesh, StVenantKirchhoff::make(kYoung, 0.0, kDensity, PlaneMode::stress), PlaneMode::stress, ElementKind::q4_full);
+  for (double speed : {1.0, 0.5})
+  for (double f : {1.0, 4.0}) {
+    std::vector<PrescribedDof> p;
+    for (int n : mesh.node_sets.at("left")) p.push_back({2 * n, PrescribedDof::Kind::velocity, 0.0});
+    for (int n : mesh.node_sets.at("right")) p.push_back({2 * n, PrescribedDof::Kind::velocity, speed});
+    RunSettings s;
+    s.dt = f * model.critical_dt;
+    s.end_time = 1e-3;
+    s.prescribed = p;
+    const RunResult r = run_implicit(model, s, ImplicitSettings{});
+    std::printf("bar V %.1f f %.1f: errmax %.3e\n", speed, f, r.energy_error_max);
+  }
+}
+TEST(Explore, Theta) {
+  const Model model = vibrating_slab();
+  for (double f : {1.0, 5.0})
+  for (double th : {0.5, 0.6, 1.0}) {
+    RunSettings s;
+    s.dt = f * model.critical_dt;
+    s.end_time = 37e-3;
+    ImplicitSettings im;
+    im.theta = im.xi = th;
+    const RunResult r = run_implicit(model, s, im);
+    const History& h = r.history;
+    const std::size_t e = h.column("total_energy");
+    double maxup = 0;
+    for (std::size_t row = 1; row < h.rows(); ++row) maxup = std::max(maxup, h.at(row, e) - h.at(row - 1, e));
+    std::printf("th %.1f f %.0f: %s steps %ld loss %.4f maxup %.3e\n", th, f, r.status == RunStatus::ok ? "ok" : r.reason.c_str(), r.steps, 1 - h.at(h.rows()-1, e) / r.initial_energy, maxup / r.initial_energy);
+  }
+}
 }  // namespace
 }  // namespace ricochet

@@ -1,0 +1,24 @@
+// Kinematics shared by the element kernels.
+#pragma once
+
+#include "solver/types.hpp"
+
+namespace ricochet {
+
+// F = I + ue^T dN/dX, built as columns F.col(J) = e_J + sum_I ue.row(I)^T dN(I, J): 2-wide
+// FMAs that stay in registers. (The Eigen expression `I + ue^T dN` makes GCC 12 store the four
+// dot products separately and reload them as vectors, a store-forwarding stall.)
+// ue: N x 2 nodal displacements (rows = element nodes); dn: N x 2 shape-function gradients.
+template <int N>
+EIGEN_ALWAYS_INLINE Mat2 deformation_gradient(const Eigen::Matrix<double, N, 2>& ue,
+                                              const Eigen::Matrix<double, N, 2>& dn) {
+  Mat2 F = Mat2::Identity();
+  for (int I = 0; I < N; ++I) {
+    const Vec2 uI = ue.row(I).transpose();
+    F.col(0) += uI * dn(I, 0);
+    F.col(1) += uI * dn(I, 1);
+  }
+  return F;
+}
+
+}  // namespace ricochet
