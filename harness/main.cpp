@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "harness/case_setup.hpp"
+#include "harness/gates.hpp"
 #include "harness/input_error.hpp"
 #include "harness/run_outputs.hpp"
 
@@ -18,11 +19,13 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet]\n"
+    "       ricochet check SUMMARY.csv GATES.toml [--junit FILE]\n"
     "       ricochet --version | --help\n"
     "  run       run a case; writes DIR/summary.json, DIR/history.csv, DIR/fields/*.vtu\n"
     "  --set     override a case key, e.g. --set time.dt=1e-6 --set mesh=M2\n"
     "  --out     output folder (default: results/<case name>)\n"
-    "  --quiet   no progress and no summary line\n";
+    "  --quiet   no progress and no summary line\n"
+    "  check     evaluate gate files on a sweep's summary.csv (docs/gates.md); exit 4 if a gate fails\n";
 
 // Progress on stderr for runs longer than a couple of seconds: in place on a terminal,
 // one line every 10 s otherwise (CI logs).
@@ -101,7 +104,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args[0] == "run") return run_command({args.begin() + 1, args.end()});
-    throw ricochet::InputError("ricochet: unknown command '" + args[0] + "'; allowed: run, --version, --help");
+    if (args[0] == "check") return ricochet::check_command({args.begin() + 1, args.end()});
+    throw ricochet::InputError("ricochet: unknown command '" + args[0] + "'; allowed: run, check, --version, --help");
   } catch (const ricochet::InputError& e) {
     std::fprintf(stderr, "ricochet: %s\n", e.what());
     return 2;

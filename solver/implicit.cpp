@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace ricochet {
 
@@ -115,11 +116,14 @@ double ImplicitIntegrator::residual(bool with_energy) {
     prescribed_v_[p.dof] = g_[p.dof];  // the unconstrained residual: dt times the reaction
     g_[p.dof] = 0.0;
   }
-  const double scale = std::max({model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
-                                 model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
-                                 dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
-                                 dt * s_.f_ext.lpNorm<Eigen::Infinity>(),
-                                 dt * impulse_.lpNorm<Eigen::Infinity>(), 1e-300});
+  // The momentum scale of the residual: the largest seen in the run, so the round-off floor of G
+  // (e.g. the cancellation in E = (F^T F - I)/2) stays relative to the problem's scale when the
+  // motion decays.
+  scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
+                     model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
+                     dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
+                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(), 1e-300});
+  const double scale = scale_;
   return g_.lpNorm<Eigen::Infinity>() / scale;
 }
 
@@ -309,6 +313,14 @@ bool ImplicitIntegrator::step(bool with_energy) {
   residuals_.clear();
   int sweeps = 0;
   double r = residual(false);
+  if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
+    v1_ = v0_;  // the extrapolated predictor inverted an element: start from v0 instead
+    for (const auto& p : run_.prescribed)
+      v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
+                       ? p.value
+                       : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+    r = residual(false);
+  }
   for (int it = 0;; ++it) {
     if (!std::isfinite(r)) {
       failure_ = "non-finite Newton residual at iteration " + std::to_string(it);
@@ -319,8 +331,9 @@ bool ImplicitIntegrator::step(bool with_energy) {
     // inside an iteration, and a free iterate can have a zero residual (a rigid translation).
     if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty())) break;
     if (it == set_.max_newton_iterations) {
-      failure_ = "Newton did not converge in " + std::to_string(it) + " iterations (relative residual " +
-                 std::to_string(r) + ")";
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations (relative residual %.3g)", it, r);
+      failure_ = buf;
       return false;
     }
     ++newton_total_;

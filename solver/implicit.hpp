@@ -95,6 +95,7 @@ class ImplicitIntegrator {
   std::vector<double> residuals_;
   std::string failure_;
   double hourglass_power0_ = 0.0;
+  double scale_ = 0.0;  // largest momentum scale of the residual so far
   long newton_total_ = 0, linear_total_ = 0;
   long exact_contact_solves_ = 0;
   long shifted_iterations_ = 0;

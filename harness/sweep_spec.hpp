@@ -1,0 +1,89 @@
+// A sweep file (docs/sweeps.md): a base case plus lists of case-key values to cross, read and
+// validated, and its expansion into the list of runs. Each run is the base case with a list of
+// `--set KEY=VALUE` overrides.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+namespace ricochet {
+
+// One case-key value of a sweep file.
+struct SweepValue {
+  std::string key;      // canonical dotted case key, array elements as [N], e.g. "obstacles[0].friction"
+  std::string toml;     // the value as TOML text, e.g. "1e-5", "\"M1\"", "[0.0, -9.81]"
+  std::string display;  // the value for tables and run ids: strings without quotes, e.g. "M1"
+  std::string where;    // "FILE:LINE: KEY" of the value in the sweep file, for messages
+
+  std::string set_arg() const { return key + "=" + toml; }  // the --set argument
+};
+
+struct SweepAxis {
+  std::string key;                 // canonical case key
+  std::vector<SweepValue> values;  // in the order written; at least one
+};
+
+struct SweepGroup {
+  std::string name;
+  std::string description;
+  std::vector<SweepValue> set;        // group overrides
+  std::vector<SweepAxis> cross;       // crossed in the order written (first = outermost)
+  std::vector<SweepValue> reference;  // empty = no reference runs
+  std::string error_probe = "P";      // probe whose displacement error is measured
+  std::string where;                  // "FILE:LINE: group[N]"
+};
+
+struct SweepSpec {
+  std::string file;             // the sweep file, as given
+  std::string name;             // default: the file's stem
+  std::string description;
+  std::filesystem::path base;   // the base case file, resolved against the sweep file's folder
+  std::vector<SweepValue> set;  // overrides for every run
+  std::vector<SweepGroup> groups;
+};
+
+// One run of an expanded sweep.
+struct SweepRun {
+  std::string id;      // "<group>/<NNN>-<slug>", or "<group>/reference[-<slug>]"
+  std::string group;
+  bool is_reference = false;
+  std::vector<SweepValue> overrides;  // merged: sweep set, group set, crossed values (then reference values)
+  std::vector<std::string> swept;     // keys of `overrides` that come from `cross` (or `reference`)
+  std::string reference_id;           // id of the run's reference run; empty if none
+  std::string error_probe;            // probe name for the reference errors (groups with a reference)
+
+  std::vector<std::string> set_args() const;  // "key=value" for read_case / ricochet run --set
+  std::filesystem::path folder() const;       // "runs/<id>", relative to the sweep's output folder
+};
+
+// Reads and validates a sweep file (not the cases: see check_runs in sweep.hpp). Throws
+// InputError with a one-line message "FILE:LINE: KEY: what is wrong; allowed: ...".
+SweepSpec read_sweep(const std::string& file);
+
+// The runs of a sweep: for each group in order, its reference runs (one per distinct
+// combination of the crossed keys that `reference` does not set, in first-seen order), then the
+// cartesian product of its `cross` lists (the first key varies slowest). Throws InputError if
+// the sweep has more than 100000 runs.
+std::vector<SweepRun> expand(const SweepSpec& spec);
+
+// --- pieces, exposed for tests ----------------------------------------------------------------
+
+// A TOML value as TOML text that parses back to the same value: strings quoted and escaped,
+// floats in shortest round-trip form with a short exponent ("1e-5", "0.25", "2.0"), arrays as
+// "[a, b]", tables as "{ k = v }". Throws InputError for date/time values.
+std::string toml_text(const toml::node& value);
+
+// The display form of a value: like toml_text, except that a top-level string is unquoted.
+std::string display_text(const toml::node& value);
+
+// A key with array indices written as [N]: "bodies.0.element" -> "bodies[0].element".
+std::string canonical_key(const std::string& key);
+
+// Run-id slug of key=value pairs joined by '_', every character outside [A-Za-z0-9._=-]
+// replaced ('[' by '.', ']' dropped, others by '_'), capped at 120 characters.
+std::string slug(const std::vector<SweepValue>& values);
+
+}  // namespace ricochet

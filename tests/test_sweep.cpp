@@ -1,0 +1,656 @@
+// Sweeps (docs/sweeps.md): expansion of a sweep file into runs and their overrides, validation
+// with one-line errors and nothing written, summary.csv, the JSON reader, and the execution of
+// small sweeps of a tiny case with the real `ricochet` program: statuses, failures, resume,
+// repeats and errors against a reference run.
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "harness/input_error.hpp"
+#include "harness/json_reader.hpp"
+#include "harness/sweep.hpp"
+#include "harness/sweep_spec.hpp"
+
+namespace fs = std::filesystem;
+using namespace ricochet;
+
+namespace {
+
+// A 4 x 2-cell plate held at its left edge and set moving upwards: it vibrates, so its probe
+// and energy histories depend on the time step. `bad` names a mesh file that does not exist:
+// the case passes validation and the run fails when it builds the mesh.
+const std::string kCase = R"(name = "tiny"
+mesh = "m"
+[meshes.m]
+generator = "rectangle"
+width = 0.1
+height = 0.05
+nx = 4
+ny = 2
+[meshes.bad]
+file = "missing.msh"
+[[bodies]]
+name = "b"
+velocity = [0.0, 1.0]
+[bodies.material]
+young = 1e6
+poisson = 0.3
+density = 1000.0
+[[boundary]]
+nodes = "left"
+type = "displacement"
+x = 0.0
+y = 0.0
+[time]
+end = 2e-3
+dt = 1e-5
+[output]
+interval = 1e-4
+[[output.probes]]
+name = "P"
+point = [0.1, 0.05]
+)";
+
+class SweepTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ricochet_sweep_" + std::to_string(getpid()) + "_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    write("case.toml", kCase);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  fs::path out() const { return dir_ / "out"; }
+
+  SweepOutcome run(const std::string& sweep_text, int jobs = 1, int repeat = 1, bool force = false,
+                   const std::string& program = RICOCHET_BINARY) {
+    const SweepSpec spec = read_sweep(write("sweep.toml", sweep_text));
+    SweepOptions o;
+    o.out_dir = out();
+    o.jobs = jobs;
+    o.repeat = repeat;
+    o.force = force;
+    o.executable = program;
+    o.log = &log_;
+    return run_sweep(spec, expand(spec), o);
+  }
+
+  // Expects read_sweep + expand + check_runs to reject the sweep, naming each of `parts`.
+  void expect_rejected(const std::string& sweep_text, const std::vector<std::string>& parts) {
+    const std::string file = write("sweep.toml", sweep_text);
+    try {
+      const SweepSpec spec = read_sweep(file);
+      check_runs(spec, expand(spec));
+      ADD_FAILURE() << "accepted: " << sweep_text;
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+      EXPECT_NE(msg.find(file), std::string::npos) << "names the sweep file: " << msg;
+      for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " in: " << msg;
+    }
+  }
+
+  fs::path dir_;
+  std::ostringstream log_;
+};
+
+std::vector<std::string> ids(const std::vector<SweepRun>& runs) {
+  std::vector<std::string> v;
+  for (const auto& r : runs) v.push_back(r.id);
+  return v;
+}
+
+// summary.csv as rows of column -> value (RFC 4180 quoting).
+struct Table {
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  const std::map<std::string, std::string>& row(const std::string& id) const {
+    for (const auto& r : rows)
+      if (r.at("run_id") == id) return r;
+    throw std::logic_error("no row " + id);
+  }
+};
+
+std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
+  std::vector<std::vector<std::string>> out(1);
+  std::string cur;
+  bool quoted = false, fresh = true;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cur += c;
+      }
+    } else if (c == '"' && fresh) {
+      quoted = true;
+    } else if (c == ',') {
+      out.back().push_back(cur);
+      cur.clear();
+      fresh = true;
+      continue;
+    } else if (c == '\n') {
+      out.back().push_back(cur);
+      cur.clear();
+      out.emplace_back();
+      fresh = true;
+      continue;
+    } else {
+      cur += c;
+    }
+    fresh = false;
+  }
+  if (out.back().empty()) out.pop_back();
+  return out;
+}
+
+Table read_table(const fs::path& p) {
+  std::stringstream s;
+  s << std::ifstream(p).rdbuf();
+  const auto lines = parse_csv(s.str());
+  Table t;
+  if (lines.empty()) return t;
+  t.header = lines[0];
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    EXPECT_EQ(lines[i].size(), t.header.size()) << "row " << i;
+    std::map<std::string, std::string> r;
+    for (std::size_t c = 0; c < t.header.size() && c < lines[i].size(); ++c) r[t.header[c]] = lines[i][c];
+    t.rows.push_back(r);
+  }
+  return t;
+}
+
+bool has_column(const Table& t, const std::string& c) {
+  return std::find(t.header.begin(), t.header.end(), c) != t.header.end();
+}
+
+double num(const std::map<std::string, std::string>& row, const std::string& col) {
+  const std::string& s = row.at(col);
+  EXPECT_FALSE(s.empty()) << col;
+  return std::stod(s);
+}
+
+// Modification time in nanoseconds.
+long long mtime_ns(const fs::path& p) {
+  struct stat st {};
+  if (stat(p.c_str(), &st) != 0) return -1;
+  return static_cast<long long>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+}
+
+}  // namespace
+
+// ---- expansion -----------------------------------------------------------------------------------
+
+TEST_F(SweepTest, CartesianExpansionInWrittenKeyOrder) {
+  const SweepSpec spec = read_sweep(write("s.toml", R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5, 3e-5], mesh = ["m", "bad"] }
+)"));
+  EXPECT_EQ(spec.name, "s");
+  EXPECT_EQ(spec.base, (dir_ / "case.toml").lexically_normal());
+  const auto runs = expand(spec);
+  // The first key written (time.dt) varies slowest, although "mesh" sorts first.
+  EXPECT_EQ(ids(runs), (std::vector<std::string>{"g/000-time.dt=1e-5_mesh=m", "g/001-time.dt=1e-5_mesh=bad",
+                                                 "g/002-time.dt=2e-5_mesh=m", "g/003-time.dt=2e-5_mesh=bad",
+                                                 "g/004-time.dt=3e-5_mesh=m", "g/005-time.dt=3e-5_mesh=bad"}));
+  EXPECT_EQ(runs[3].set_args(), (std::vector<std::string>{"time.dt=2e-5", "mesh=\"bad\""}));
+  EXPECT_EQ(runs[3].folder(), fs::path("runs/g/003-time.dt=2e-5_mesh=bad"));
+  EXPECT_EQ(runs[3].group, "g");
+  EXPECT_FALSE(runs[3].is_reference);
+  EXPECT_EQ(runs[3].swept, (std::vector<std::string>{"time.dt", "mesh"}));
+}
+
+TEST_F(SweepTest, GroupsAreUnitedInOrderAndSetPrecedenceIsSweepGroupCross) {
+  const SweepSpec spec = read_sweep(write("s.toml", R"(
+name = "prec"
+base = "case.toml"
+set = { "time.end" = 1e-3, "output.interval" = 1e-4 }
+[[group]]
+name = "a"
+set = { "time.end" = 2e-3 }
+cross = { bodies.0.element = ["q4", "q4_hourglass"] }
+[[group]]
+name = "b"
+set = { "time.end" = 2e-3 }
+cross = { time = { end = [3e-3] } }
+[[group]]
+)"));
+  const auto runs = expand(spec);
+  ASSERT_EQ(runs.size(), 4u);
+  EXPECT_EQ(ids(runs), (std::vector<std::string>{"a/000-bodies.0.element=q4", "a/001-bodies.0.element=q4_hourglass",
+                                                 "b/000-time.end=0.003", "group2/000"}));
+  // Group set beats sweep set; a key set twice is passed once, in the place of the later one.
+  EXPECT_EQ(runs[1].set_args(),
+            (std::vector<std::string>{"output.interval=1e-4", "time.end=0.002", "bodies[0].element=\"q4_hourglass\""}));
+  // Crossed values beat both (a nested table is the same as a dotted key).
+  EXPECT_EQ(runs[2].set_args(), (std::vector<std::string>{"output.interval=1e-4", "time.end=0.003"}));
+  // A group without `cross` is one run with the sweep's set.
+  EXPECT_EQ(runs[3].set_args(), (std::vector<std::string>{"time.end=0.001", "output.interval=1e-4"}));
+  check_runs(spec, runs);  // all valid for the case
+}
+
+TEST_F(SweepTest, ReferenceRunsOnePerCombinationOfTheOtherKeys) {
+  const SweepSpec spec = read_sweep(write("s.toml", R"(
+base = "case.toml"
+[[group]]
+name = "acc"
+cross = { "bodies[0].element" = ["q4", "q4_hourglass"], "time.dt" = [4e-5, 2e-5] }
+reference = { "time.dt" = 5e-6 }
+)"));
+  const auto runs = expand(spec);
+  ASSERT_EQ(runs.size(), 6u);
+  EXPECT_TRUE(runs[0].is_reference);
+  EXPECT_TRUE(runs[1].is_reference);
+  EXPECT_EQ(runs[0].id, "acc/reference-bodies.0.element=q4_time.dt=5e-6");
+  EXPECT_EQ(runs[1].id, "acc/reference-bodies.0.element=q4_hourglass_time.dt=5e-6");
+  EXPECT_EQ(runs[0].set_args(), (std::vector<std::string>{"bodies[0].element=\"q4\"", "time.dt=5e-6"}));
+  EXPECT_EQ(runs[2].id, "acc/000-bodies.0.element=q4_time.dt=4e-5");
+  EXPECT_EQ(runs[2].reference_id, runs[0].id);
+  EXPECT_EQ(runs[3].reference_id, runs[0].id);
+  EXPECT_EQ(runs[4].reference_id, runs[1].id);
+  EXPECT_EQ(runs[5].reference_id, runs[1].id);
+  EXPECT_EQ(runs[5].error_probe, "P");
+  check_runs(spec, runs);
+}
+
+TEST(SweepValues, TomlTextRoundTripsAndDisplays) {
+  const toml::table t = toml::parse(R"(
+a = 1e-5
+b = 2.0
+c = 0.1
+d = "say \"hi\"\n"
+e = [0.0, -9.81]
+f = 7
+g = true
+h = { plate = 0.1 }
+i = 1e300
+)");
+  const std::map<std::string, std::string> expected = {
+      {"a", "1e-5"}, {"b", "2.0"}, {"c", "0.1"}, {"d", "\"say \\\"hi\\\"\\n\""}, {"e", "[0.0, -9.81]"},
+      {"f", "7"},    {"g", "true"}, {"h", "{ plate = 0.1 }"}, {"i", "1e300"}};
+  for (const auto& [k, text] : expected) {
+    const toml::node& v = *t.get(k);
+    EXPECT_EQ(toml_text(v), text) << k;
+    const toml::table back = toml::parse("v = " + toml_text(v));
+    EXPECT_EQ(toml_text(*back.get("v")), text) << k;
+    if (v.is_floating_point()) {
+      EXPECT_EQ(*back.get("v")->value<double>(), *v.value<double>()) << k;
+    }
+  }
+  EXPECT_EQ(display_text(*t.get("d")), "say \"hi\"\n");
+  EXPECT_EQ(canonical_key("bodies.0.material.young"), "bodies[0].material.young");
+  EXPECT_EQ(slug({{"obstacles[0].friction", "0.1", "0.1", ""}, {"gravity", "[0.0, -9.81]", "[0.0, -9.81]", ""},
+                  {"description", "\"a b/c\"", "a b/c", ""}}),
+            "obstacles.0.friction=0.1_gravity=0.0_-9.81_description=a_b_c");
+}
+
+// ---- validation -----------------------------------------------------------------------------------
+
+TEST_F(SweepTest, BadSweepFilesAreRejectedWithFileAndKey) {
+  const std::string g = "\n[[group]]\ncross = { mesh = [\"m\"] }\n";
+  expect_rejected("base = \"case.toml\"\nbogus = 1" + g, {"sweep.toml:2", "bogus", "unknown key", "allowed"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncrosss = { mesh = [\"m\"] }\n", {":3", "group[0].crosss", "unknown key"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { mesh = [] }\n", {":3", "group[0].cross.mesh", "empty list"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { mesh = \"m\" }\n", {"group[0].cross.mesh", "list"});
+  expect_rejected("base = \"nowhere.toml\"" + g, {":1", "base", "nowhere.toml", "not found"});
+  expect_rejected("name = \"x\"" + g, {"base", "missing"});
+  expect_rejected("base = \"case.toml\"\n", {"group", "missing"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\nname = \"a\"\n[[group]]\nname = \"a\"\n", {":5", "group[1].name", "already"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\nname = \"../up\"\n", {"group[0].name", "allowed"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5, 1e-5] }\n", {"time.dt", "twice"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { time.dt = [1e-5], \"time.dt\" = [2e-5] }\n", {"time.dt", "twice"});
+  expect_rejected("base = \"case.toml\"\nset = { when = 1979-05-27 }" + g, {"set.when", "date"});
+  expect_rejected("base = \"case.toml\" oops" + g, {":1", "TOML syntax error"});
+  // Keys and values the case rejects: found before anything runs, naming the sweep file's line.
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { \"time.dtt\" = [1e-5] }\n",
+                  {"sweep.toml:3", "group[0].cross.time.dtt", "time.dtt: unknown key", "case.toml"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { mesh = [\"m\", \"q\"] }\n",
+                  {"run group0/001-mesh=q", "no mesh named \"q\""});
+  expect_rejected("base = \"case.toml\"\n[[group]]\nset = { \"time.dt\" = -1.0 }\n", {"set.time.dt", "> 0"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5] }\nreference = { \"time.dt\" = 1e-6 }\n"
+                  "error_probe = \"Q\"\n",
+                  {"error_probe", "no probe \"Q\"", "P"});
+  expect_rejected("base = \"case.toml\"\n[[group]]\nerror_probe = \"P\"\n", {"error_probe", "reference"});
+}
+
+TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
+  const std::string bad = write("bad.toml", "base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5, -1.0] }\n");
+  const std::string good = write("good.toml", "base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5] }\n");
+  const std::vector<std::vector<std::string>> cases = {
+      {bad, "--out", out().string()},
+      {good, "--out", out().string(), "--jobs", "0"},
+      {good, "--out", out().string(), "--repeat", "x"},
+      {good, "--out", out().string(), "--bogus"},
+      {(dir_ / "absent.toml").string(), "--out", out().string()},
+      {"--out", out().string()},
+  };
+  for (const auto& args : cases) {
+    ::testing::internal::CaptureStderr();
+    const int status = sweep_command(args);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(status, 2) << args[0] << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_EQ(err.rfind("ricochet: ", 0), 0u) << err;
+    EXPECT_FALSE(fs::exists(out())) << "nothing may be written on bad input: " << err;
+  }
+}
+
+// ---- JSON reader and summary table ---------------------------------------------------------------
+
+TEST(JsonReader, ParsesDocumentsAndRejectsMalformedOnes) {
+  const JsonValue v = parse_json(
+      R"( {"a": 1, "b": [true, false, null, -0.5e-3], "c": {"d": "x\"\\\/\b\f\n\r\t\u00e9\ud83d\ude00"}, "e": 12345678901234567890} )");
+  ASSERT_TRUE(v.is_object());
+  EXPECT_EQ(v.find("a")->text, "1");
+  EXPECT_EQ(v.find("a")->number, 1.0);
+  ASSERT_EQ(v.find("b")->items.size(), 4u);
+  EXPECT_TRUE(v.find("b")->items[0].boolean);
+  EXPECT_TRUE(v.find("b")->items[2].is_null());
+  EXPECT_EQ(v.find("b")->items[3].number, -0.5e-3);
+  EXPECT_EQ(v.find("c")->find("d")->text, "x\"\\/\b\f\n\r\t\xC3\xA9\xF0\x9F\x98\x80");
+  EXPECT_EQ(v.find("e")->text, "12345678901234567890");
+  EXPECT_EQ(v.find("zz"), nullptr);
+  EXPECT_EQ(v.compact(), R"({"a":1,"b":[true,false,null,-0.5e-3],"c":{"d":"x\"\\/\b\f\n\r\té😀"},"e":12345678901234567890})");
+  EXPECT_EQ(parse_json(v.compact()).compact(), v.compact());
+  EXPECT_TRUE(parse_json("[]").is_array());
+  EXPECT_TRUE(parse_json("{}").is_object());
+  for (const char* bad : {"", "{", "[1,]", "{\"a\":1,}", "01", "1.", "-", "1e", "\"abc", "\"a\nb\"", "\"\\x\"",
+                          "\"\\ud800\"", "tru", "nul", "{} x", "{a:1}", "[1 2]", "'a'", "+1", ".5"})
+    EXPECT_THROW(parse_json(bad), JsonParseError) << bad;
+  EXPECT_THROW(parse_json(std::string(300, '[') + std::string(300, ']')), JsonParseError);
+  try {
+    parse_json("{\n  \"a\": tru\n}");
+    ADD_FAILURE();
+  } catch (const JsonParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SummaryTable, UnionOfColumnsPlaceholdersAndNameClashes) {
+  SummaryRow ok{"g/000", "g", "run", "ok", "", {{"scheme", "explicit"}, {"time.dt", "1e-5"}}, {}, {{"repeats", "1"}}};
+  ok.summary = flatten_summary(parse_json(
+      R"({"case":"c","scheme":"explicit","status":"ok","diverged":null,"probes":[{"name":"P","x":0}],"final":{"time":1,"energy":2},"friction_coeff":null})"));
+  SummaryRow div{"g/001", "g", "run", "diverged", "energy growth", {{"scheme", "explicit"}, {"time.dt", "1e-3"}}, {}, {}};
+  div.summary = flatten_summary(parse_json(
+      R"({"case":"c","scheme":"explicit","status":"diverged","diverged":{"reason":"energy growth","step":3},"probes":[],"final":{"time":0.5,"energy":9,"extra":1},"friction_coeff":null})"));
+  SummaryRow failed{"g/002", "g", "run", "failed", "exit 2: ricochet: x, y", {{"scheme", "implicit"}, {"time.dt", "1e-3"}}, {}, {}};
+  const std::string csv = format_summary_csv({ok, div, failed}, {{"scheme", "time.dt"}, {"repeats", "error_energy"}});
+  const auto lines = parse_csv(csv);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], (std::vector<std::string>{"run_id", "group", "kind", "status", "reason", "scheme", "time.dt", "case",
+                                                "summary.scheme", "diverged.reason", "diverged.step", "probes", "final.time",
+                                                "final.energy", "final.extra", "friction_coeff", "repeats", "error_energy"}));
+  EXPECT_EQ(lines[1], (std::vector<std::string>{"g/000", "g", "run", "ok", "", "explicit", "1e-5", "c", "explicit", "", "",
+                                                R"([{"name":"P","x":0}])", "1", "2", "", "", "1", ""}));
+  EXPECT_EQ(lines[2][9], "energy growth");
+  EXPECT_EQ(lines[2][10], "3");
+  EXPECT_EQ(lines[3][4], "exit 2: ricochet: x, y");
+  EXPECT_EQ(lines[3][7], "");
+  EXPECT_NE(csv.find("\"exit 2: ricochet: x, y\""), std::string::npos);
+}
+
+TEST(ReferenceErrors, ZeroForTheSameHistoryAndInterpolatedOtherwise) {
+  HistoryTable ref{{"time", "total_energy", "P_ux", "P_uy"}, {{0, 10, 0, 0}, {1, 10, 1, 0}, {2, 12, 2, 0}}};
+  const ReferenceErrors same = reference_errors(ref, ref, "P", 10.0);
+  EXPECT_EQ(same.samples, 3u);
+  EXPECT_EQ(*same.probe, 0.0);
+  EXPECT_EQ(*same.energy, 0.0);
+  // Samples at 0.5 and 1.5 (and 3, after the reference's end: skipped).
+  HistoryTable run{{"time", "P_ux", "P_uy", "total_energy"}, {{0.5, 0.5, 0.3, 10}, {1.5, 1.5, -0.4, 10}, {3, 9, 9, 99}}};
+  const ReferenceErrors e = reference_errors(run, ref, "P", 10.0);
+  EXPECT_EQ(e.samples, 2u);
+  EXPECT_DOUBLE_EQ(*e.probe, 0.4);
+  EXPECT_DOUBLE_EQ(*e.energy, 0.1);  // |10 - 11| / 10 at t = 1.5
+  EXPECT_FALSE(reference_errors(run, ref, "Q", 10.0).probe.has_value());
+}
+
+// ---- execution ------------------------------------------------------------------------------------
+
+TEST_F(SweepTest, SmallSweepWritesOneRowPerRunWithSweptColumnsAndSummaryKeys) {
+  const SweepOutcome o = run(R"(
+name = "four"
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5], "bodies[0].element" = ["q4", "q4_hourglass"] }
+)");
+  EXPECT_EQ(o.total, 4u);
+  EXPECT_EQ(o.executed, 4u);
+  EXPECT_EQ(o.ok, 4u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 4u);
+  ASSERT_GE(t.header.size(), 7u);
+  EXPECT_EQ(std::vector<std::string>(t.header.begin(), t.header.begin() + 7),
+            (std::vector<std::string>{"run_id", "group", "kind", "status", "reason", "time.dt", "bodies[0].element"}));
+  for (const char* c : {"case", "overrides", "scheme", "steps", "dt", "wall_seconds", "cpu_seconds", "element_steps_per_second",
+                        "contact_iterations.mean", "final.kinetic_energy", "final.momentum_y", "probes", "build.compiler",
+                        "written_at", "implicit", "diverged", "friction_coeff", "repeats", "wall_seconds_min",
+                        "wall_seconds_max", "error_probe_P", "error_energy", "reference_run", "reference_dt"})
+    EXPECT_TRUE(has_column(t, c)) << c;
+  const auto& r = t.row("g/003-time.dt=2e-5_bodies.0.element=q4_hourglass");
+  EXPECT_EQ(r.at("status"), "ok");
+  EXPECT_EQ(r.at("kind"), "run");
+  EXPECT_EQ(r.at("time.dt"), "2e-5");
+  EXPECT_EQ(r.at("bodies[0].element"), "q4_hourglass");
+  EXPECT_EQ(r.at("element"), "q4_hourglass");
+  EXPECT_EQ(r.at("steps"), "100");
+  EXPECT_EQ(r.at("repeats"), "1");
+  EXPECT_EQ(r.at("error_energy"), "");
+  EXPECT_NE(r.at("overrides").find("time.dt=2e-5"), std::string::npos);
+  EXPECT_EQ(t.rows[0].at("run_id"), "g/000-time.dt=1e-5_bodies.0.element=q4");  // rows in run order
+
+  // sweep.json and each run's folder.
+  const JsonValue s = read_json_file(out() / "sweep.json");
+  EXPECT_EQ(s.find("sweep")->text, "four");
+  EXPECT_EQ(s.find("runs")->items.size(), 4u);
+  EXPECT_FALSE(s.find("finished_at")->is_null());
+  const fs::path f = out() / "runs/g/003-time.dt=2e-5_bodies.0.element=q4_hourglass";
+  for (const char* file : {"summary.json", "history.csv", "overrides.json", "stderr.txt"})
+    EXPECT_TRUE(fs::exists(f / file)) << file;
+  // Progress: one line per run, "[k/total] id status wall ... | elapsed ..., left ~...".
+  const std::string log = log_.str();
+  EXPECT_NE(log.find("[1/4] g/000-time.dt=1e-5_bodies.0.element=q4 ok wall "), std::string::npos) << log;
+  EXPECT_NE(log.find("[4/4] "), std::string::npos) << log;
+  EXPECT_NE(log.find(" | elapsed "), std::string::npos) << log;
+  EXPECT_NE(log.find(", left ~"), std::string::npos) << log;
+}
+
+TEST_F(SweepTest, ResumeRerunsOnlyUnfinishedRuns) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5, 4e-5, 5e-5] }
+)";
+  ASSERT_EQ(run(sweep).executed, 4u);
+  std::vector<fs::path> summaries;
+  for (const auto& e : fs::directory_iterator(out() / "runs" / "g")) summaries.push_back(e.path() / "summary.json");
+  std::sort(summaries.begin(), summaries.end());
+  ASSERT_EQ(summaries.size(), 4u);
+  std::vector<long long> before;
+  for (const auto& p : summaries) before.push_back(mtime_ns(p));
+
+  // Nothing to do.
+  const SweepOutcome again = run(sweep);
+  EXPECT_EQ(again.resumed, 4u);
+  EXPECT_EQ(again.executed, 0u);
+  EXPECT_EQ(read_table(out() / "summary.csv").rows.size(), 4u);
+
+  // An interrupted run (no summary.json) is the only one run again.
+  fs::remove(summaries[2]);
+  const SweepOutcome resumed = run(sweep);
+  EXPECT_EQ(resumed.resumed, 3u);
+  EXPECT_EQ(resumed.executed, 1u);
+  for (std::size_t i = 0; i < summaries.size(); ++i) {
+    ASSERT_TRUE(fs::exists(summaries[i]));
+    if (i == 2) EXPECT_GT(mtime_ns(summaries[i]), before[i]);
+    else EXPECT_EQ(mtime_ns(summaries[i]), before[i]) << summaries[i];
+  }
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 4u);
+  for (const auto& r : t.rows) EXPECT_EQ(r.at("status"), "ok");
+
+  // Other overrides for a run: that run is done again; --force: all of them.
+  const std::string changed = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5, 4e-5, 5e-5] }
+set = { "bodies[0].thickness" = 2.0 }
+)";
+  EXPECT_EQ(run(changed).executed, 4u);
+  EXPECT_EQ(run(changed, 1, 1, true).executed, 4u);
+}
+
+TEST_F(SweepTest, DivergedAndFailedRunsAreRecordedAndTheSweepGoesOn) {
+  // A program that dies by a signal for runs whose description is "crash", and runs ricochet
+  // otherwise.
+  const std::string program = write("crashy.sh", std::string("#!/bin/sh\ncase \"$*\" in *crash*) kill -s KILL $$ ;; esac\nexec '") +
+                                                     RICOCHET_BINARY + "' \"$@\"\n");
+  fs::permissions(program, fs::perms::owner_all);
+  const SweepOutcome o = run(R"(
+base = "case.toml"
+[[group]]
+name = "mix"
+cross = { mesh = ["m", "bad"], description = ["fine", "crash"] }
+[[group]]
+name = "div"
+set = { "time.dt" = 4e-3, "time.end" = 0.4, "output.interval" = 4e-3 }
+)",
+                             1, 1, false, program);
+  EXPECT_EQ(o.total, 5u);
+  EXPECT_EQ(o.executed, 5u);
+  EXPECT_EQ(o.ok, 1u);
+  EXPECT_EQ(o.diverged, 1u);
+  EXPECT_EQ(o.failed, 3u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 5u);
+  EXPECT_EQ(t.row("mix/000-mesh=m_description=fine").at("status"), "ok");
+  const auto& missing = t.row("mix/002-mesh=bad_description=fine");
+  EXPECT_EQ(missing.at("status"), "failed");
+  EXPECT_EQ(missing.at("reason").rfind("exit 2: ricochet: ", 0), 0u) << missing.at("reason");
+  EXPECT_NE(missing.at("reason").find("missing.msh"), std::string::npos) << missing.at("reason");
+  EXPECT_EQ(missing.at("steps"), "");
+  EXPECT_EQ(missing.at("mesh"), "bad");
+  for (const char* id : {"mix/001-mesh=m_description=crash", "mix/003-mesh=bad_description=crash"}) {
+    EXPECT_EQ(t.row(id).at("status"), "failed");
+    EXPECT_EQ(t.row(id).at("reason").rfind("killed by signal 9", 0), 0u) << t.row(id).at("reason");
+  }
+  const auto& div = t.row("div/000");
+  EXPECT_EQ(div.at("status"), "diverged");
+  EXPECT_FALSE(div.at("reason").empty());
+  EXPECT_EQ(div.at("reason"), div.at("diverged.reason"));
+  EXPECT_NE(log_.str().find("killed by signal 9"), std::string::npos);
+
+  // Failed runs have no summary.json: a second invocation tries them again, and only them.
+  const SweepOutcome again = run(R"(
+base = "case.toml"
+[[group]]
+name = "mix"
+cross = { mesh = ["m", "bad"], description = ["fine", "crash"] }
+[[group]]
+name = "div"
+set = { "time.dt" = 4e-3, "time.end" = 0.4, "output.interval" = 4e-3 }
+)",
+                                 1, 1, false, program);
+  EXPECT_EQ(again.resumed, 2u);
+  EXPECT_EQ(again.executed, 3u);
+}
+
+TEST_F(SweepTest, RepeatGivesMedianAndSpread) {
+  const SweepOutcome o = run(R"(
+base = "case.toml"
+[[group]]
+name = "r"
+cross = { "time.dt" = [1e-5] }
+)",
+                             1, 3);
+  EXPECT_EQ(o.executed, 1u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 1u);
+  const auto& r = t.rows[0];
+  EXPECT_EQ(r.at("repeats"), "3");
+  const double lo = num(r, "wall_seconds_min"), med = num(r, "wall_seconds"), hi = num(r, "wall_seconds_max");
+  EXPECT_LE(lo, med);
+  EXPECT_LE(med, hi);
+  EXPECT_GT(num(r, "cpu_seconds"), 0.0);
+  const fs::path f = out() / "runs/r/000-time.dt=1e-5";
+  for (int k = 1; k <= 3; ++k) EXPECT_TRUE(fs::exists(f / ("repeat-" + std::to_string(k)) / "summary.json")) << k;
+  EXPECT_TRUE(fs::exists(f / "summary.json"));
+  EXPECT_TRUE(fs::exists(f / "history.csv"));
+  // The median is one of the three repeats' times.
+  std::vector<double> walls;
+  for (int k = 1; k <= 3; ++k)
+    walls.push_back(read_json_file(f / ("repeat-" + std::to_string(k)) / "summary.json").find("wall_seconds")->number);
+  std::sort(walls.begin(), walls.end());
+  EXPECT_DOUBLE_EQ(med, walls[1]);
+  EXPECT_DOUBLE_EQ(lo, walls[0]);
+  EXPECT_DOUBLE_EQ(hi, walls[2]);
+  // Resumed with the same repeat count: the statistics come back from the repeats' summaries.
+  EXPECT_EQ(run("base = \"case.toml\"\n[[group]]\nname = \"r\"\ncross = { \"time.dt\" = [1e-5] }\n", 1, 3).resumed, 1u);
+  EXPECT_EQ(read_table(out() / "summary.csv").rows[0].at("wall_seconds"), r.at("wall_seconds"));
+}
+
+TEST_F(SweepTest, ErrorsAgainstTheReferenceAreZeroAtItsStepAndShrinkWithDt) {
+  const SweepOutcome o = run(R"(
+base = "case.toml"
+[[group]]
+name = "acc"
+cross = { "bodies[0].element" = ["q4", "q4_hourglass"], "time.dt" = [5e-5, 2.5e-5, 1e-5] }
+reference = { "time.dt" = 1e-5 }
+)",
+                             2);
+  EXPECT_EQ(o.total, 8u);
+  EXPECT_EQ(o.ok, 8u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 8u);
+  for (const std::string el : {"q4", "q4_hourglass"}) {
+    const std::string ref = "acc/reference-bodies.0.element=" + el + "_time.dt=1e-5";
+    const auto& rr = t.row(ref);
+    EXPECT_EQ(rr.at("kind"), "reference");
+    EXPECT_EQ(rr.at("error_energy"), "");
+    const int base = el == "q4" ? 0 : 3;
+    auto id = [&](int i, const char* dt) {
+      return "acc/00" + std::to_string(base + i) + "-bodies.0.element=" + el + "_time.dt=" + dt;
+    };
+    const auto& coarse = t.row(id(0, "5e-5"));
+    const auto& mid = t.row(id(1, "2.5e-5"));
+    const auto& same = t.row(id(2, "1e-5"));
+    for (const auto* r : {&coarse, &mid, &same}) {
+      EXPECT_EQ(r->at("reference_run"), ref);
+      EXPECT_EQ(num(*r, "reference_dt"), 1e-5);
+    }
+    EXPECT_EQ(num(same, "error_probe_P"), 0.0);
+    EXPECT_EQ(num(same, "error_energy"), 0.0);
+    EXPECT_GT(num(mid, "error_probe_P"), 0.0);
+    EXPECT_GT(num(coarse, "error_probe_P"), num(mid, "error_probe_P")) << el;
+    EXPECT_GT(num(mid, "error_energy"), 0.0);
+    EXPECT_GT(num(coarse, "error_energy"), num(mid, "error_energy")) << el;
+    EXPECT_LT(num(coarse, "error_probe_P"), 1e-2);  // a few % of the probe's motion at most
+  }
+}
