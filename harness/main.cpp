@@ -12,6 +12,8 @@
 
 #include "harness/case_setup.hpp"
 #include "harness/gates.hpp"
+#include "harness/stability.hpp"
+#include "harness/sweep.hpp"
 #include "harness/input_error.hpp"
 #include "harness/run_outputs.hpp"
 
@@ -19,13 +21,17 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet]\n"
+    "       ricochet sweep SWEEP.toml --out DIR [--jobs N] [--repeat K] [--check GATES.toml] [--force]\n"
     "       ricochet check SUMMARY.csv GATES.toml [--junit FILE]\n"
+    "       ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR]\n"
     "       ricochet --version | --help\n"
     "  run       run a case; writes DIR/summary.json, DIR/history.csv, DIR/fields/*.vtu\n"
     "  --set     override a case key, e.g. --set time.dt=1e-6 --set mesh=M2\n"
     "  --out     output folder (default: results/<case name>)\n"
     "  --quiet   no progress and no summary line\n"
-    "  check     evaluate gate files on a sweep's summary.csv (docs/gates.md); exit 4 if a gate fails\n";
+    "  sweep     run a sweep of cases (docs/sweeps.md); writes DIR/summary.csv and DIR/runs/\n"
+    "  check     evaluate gate files on a sweep's summary.csv (docs/gates.md); exit 4 if a gate fails\n"
+    "  stability the largest stable time step by bisection (docs/stability.md)\n";
 
 // Progress on stderr for runs longer than a couple of seconds: in place on a terminal,
 // one line every 10 s otherwise (CI logs).
@@ -104,8 +110,11 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args[0] == "run") return run_command({args.begin() + 1, args.end()});
+    if (args[0] == "sweep") return ricochet::sweep_command({args.begin() + 1, args.end()});
     if (args[0] == "check") return ricochet::check_command({args.begin() + 1, args.end()});
-    throw ricochet::InputError("ricochet: unknown command '" + args[0] + "'; allowed: run, check, --version, --help");
+    if (args[0] == "stability") return ricochet::stability_command({args.begin() + 1, args.end()});
+    throw ricochet::InputError("ricochet: unknown command '" + args[0] +
+                               "'; allowed: run, sweep, check, stability, --version, --help");
   } catch (const ricochet::InputError& e) {
     std::fprintf(stderr, "ricochet: %s\n", e.what());
     return 2;

@@ -30,7 +30,9 @@
 
 #include "harness/atomic_file.hpp"
 #include "harness/case_spec.hpp"
+#include "harness/csv_reader.hpp"
 #include "harness/csv_writer.hpp"
+#include "harness/gates.hpp"
 #include "harness/input_error.hpp"
 #include "harness/json_writer.hpp"
 
@@ -43,11 +45,12 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUsage =
-    "usage: ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--force] [--quiet]\n"
+    "usage: ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]\n"
     "  sweep     run every case of a sweep file; writes DIR/summary.csv, DIR/sweep.json, DIR/runs/\n"
     "  --out     output folder (default: results/<sweep name>)\n"
     "  --jobs    runs at the same time (default 1: one at a time, for clean timings)\n"
     "  --repeat  run each case K times; summary.csv gets the median and the spread of the timings\n"
+    "  --check   then check the gates of GATES.toml on DIR/summary.csv (docs/gates.md); exit 4 if one fails\n"
     "  --force   rerun the runs that an earlier sweep finished\n"
     "  --quiet   no progress lines\n";
 
@@ -942,7 +945,7 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
 
 int sweep_command(const std::vector<std::string>& args) {
   try {
-    std::string file;
+    std::string file, gates_file;
     SweepOptions opt;
     for (std::size_t i = 0; i < args.size(); ++i) {
       const std::string& a = args[i];
@@ -957,21 +960,26 @@ int sweep_command(const std::vector<std::string>& args) {
       else if (is("--jobs")) opt.jobs = static_cast<int>(parse_count("--jobs", value("--jobs"), kMaxJobs));
       else if (a == "-j") opt.jobs = static_cast<int>(parse_count("--jobs", value("-j"), kMaxJobs));
       else if (is("--repeat")) opt.repeat = static_cast<int>(parse_count("--repeat", value("--repeat"), 1000));
+      else if (is("--check")) gates_file = value("--check");
       else if (a == "--force") opt.force = true;
       else if (a == "--quiet" || a == "-q") opt.quiet = true;
       else if (!a.empty() && a[0] == '-')
-        throw InputError("ricochet sweep: unknown option '" + a + "'; allowed: --out, --jobs, --repeat, --force, --quiet");
+        throw InputError("ricochet sweep: unknown option '" + a + "'; allowed: --out, --jobs, --repeat, --check, --force, --quiet");
       else if (file.empty()) file = a;
       else throw InputError("ricochet sweep: more than one sweep file ('" + file + "', '" + a + "')");
     }
     if (file.empty())
       throw InputError("ricochet sweep: missing SWEEP.toml; usage: ricochet sweep SWEEP.toml [--out DIR] "
-                       "[--jobs N] [--repeat K] [--force] [--quiet]");
+                       "[--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]");
     const SweepSpec spec = read_sweep(file);
     if (opt.out_dir.empty()) opt.out_dir = fs::path("results") / spec.name;
     const std::vector<SweepRun> runs = expand(spec);
+    // A bad gate file stops the sweep before any run.
+    const std::optional<GateFile> gates = gates_file.empty() ? std::nullopt : std::optional(read_gates(gates_file));
     run_sweep(spec, runs, opt);
-    return 0;
+    if (!gates) return 0;
+    const CsvTable table = read_csv(opt.out_dir / "summary.csv");
+    return run_gates(table, *gates, opt.out_dir / "gates-junit.xml", std::cout);
   } catch (const InputError& e) {
     std::fprintf(stderr, "ricochet: %s\n", e.what());
     return 2;

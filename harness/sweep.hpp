@@ -19,9 +19,11 @@
 namespace ricochet {
 
 // The `sweep` command: args are the words after `sweep`:
-//   SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--force] [--quiet]
-// Returns the exit status: 0 the sweep completed (diverged and failed runs are results),
-// 2 bad input (one line "ricochet: ..." on stderr, nothing written), 1 any other error.
+//   SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]
+// Returns the exit status: 0 the sweep completed (diverged and failed runs are results) and,
+// with --check, every gate passed; 4 a gate failed (gates.hpp; report DIR/gates-junit.xml);
+// 2 bad input, gate file included (one line "ricochet: ..." on stderr, nothing written);
+// 1 any other error.
 int sweep_command(const std::vector<std::string>& args);
 
 // The usage text of the sweep command (several lines, ending in '\n').

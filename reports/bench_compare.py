@@ -4,7 +4,7 @@ medians over the repetitions, the ratio new/old and whether the change is beyond
 
     /usr/bin/python3 reports/bench_compare.py OLD.json NEW.json [--fail-on-slower PCT]
 
-The rule (docs/performance.md, "Comparing two runs"), numpy only:
+The rule (numpy only; scipy is not needed):
 
   * samples: the per-repetition entries (run_type "iteration") of each benchmark, in the time
     the benchmark is judged by: real_time for manual-time benchmarks (the whole-run timings,
@@ -114,7 +114,9 @@ def human(ns):
 
 def describe(ctx):
     machine = ctx.get("machine", {})
-    parts = [ctx.get("git_commit", "?")[:19], ctx.get("date_utc", ctx.get("date", "?")),
+    commit = str(ctx.get("git_commit", "?"))
+    short = commit.split("-")[0][:12] + ("-dirty" if commit.endswith("-dirty") else "")
+    parts = [short, ctx.get("date_utc", ctx.get("date", "?")),
              machine.get("cpu_model", ctx.get("host_name", "?"))]
     if "nproc" in machine:
         parts.append(f"{machine['nproc']} cpus")

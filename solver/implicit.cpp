@@ -168,6 +168,20 @@ bool ImplicitIntegrator::solve_contact() {
   return true;
 }
 
+bool ImplicitIntegrator::engage_penetrating() {
+  bool any = false;
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
+    if (engaged_[k]) continue;
+    const ContactCandidate& cc = contact_.candidates[k];
+    const LineObstacle& ob = run_.obstacles[cc.obstacle];
+    if (ob.normal.dot(model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node) - ob.point) < 0.0) {
+      engaged_[k] = 1;
+      any = true;
+    }
+  }
+  return any;
+}
+
 void ImplicitIntegrator::build_impulse() {
   impulse_.setZero();
   for (int k : contact_.active) {
@@ -329,7 +343,9 @@ bool ImplicitIntegrator::step(bool with_energy) {
     residuals_.push_back(r);
     // With contact candidates at least one iteration runs: the contact law is only imposed
     // inside an iteration, and a free iterate can have a zero residual (a rigid translation).
-    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty())) break;
+    // Converged also requires that no contact candidate outside the engaged set penetrates at u1:
+    // the reactions of engaged contacts can push a neighbouring node into the obstacle.
+    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty()) && !engage_penetrating()) break;
     if (it == set_.max_newton_iterations) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations (relative residual %.3g)", it, r);

@@ -71,6 +71,7 @@ class ImplicitIntegrator {
   bool factorize();
   void use_direct();
   void build_impulse();
+  bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
   void constrain_matrix();
 
   const Model& model_;

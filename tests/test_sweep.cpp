@@ -341,6 +341,7 @@ TEST_F(SweepTest, BadSweepFilesAreRejectedWithFileAndKey) {
 TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
   const std::string bad = write("bad.toml", "base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5, -1.0] }\n");
   const std::string good = write("good.toml", "base = \"case.toml\"\n[[group]]\ncross = { \"time.dt\" = [1e-5] }\n");
+  const std::string bad_gates = write("gates.toml", "bogus = 1\n");
   const std::vector<std::vector<std::string>> cases = {
       {bad, "--out", out().string()},
       {good, "--out", out().string(), "--jobs", "0"},
@@ -348,6 +349,7 @@ TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
       {good, "--out", out().string(), "--bogus"},
       {(dir_ / "absent.toml").string(), "--out", out().string()},
       {"--out", out().string()},
+      {good, "--out", out().string(), "--check", bad_gates},
   };
   for (const auto& args : cases) {
     ::testing::internal::CaptureStderr();
