@@ -1,0 +1,325 @@
+"""Readers for what ricochet writes: sweep folders (summary.csv, sweep.json, runs/<id>/),
+history.csv, summary.json, ASCII VTU field files, stability.json, and the paper's reference
+numbers (reference/cros2010.toml). numpy only; no meshio.
+
+Formats: docs/outputs.md, docs/sweeps.md, docs/stability.md.
+"""
+
+import csv
+import glob
+import json
+import math
+import os
+import subprocess
+import tomllib
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+REFERENCE_TOML = os.path.join(REPO, "reference", "cros2010.toml")
+
+
+def fnum(text):
+    """A number from a summary.csv field; None when empty or not a number."""
+    if text is None:
+        return None
+    text = str(text).strip()
+    if text == "":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def same(a, b, rel=1e-9):
+    return a is not None and b is not None and abs(a - b) <= rel * max(abs(a), abs(b))
+
+
+class Run:
+    """One row of a sweep's summary.csv, with lazy access to its files."""
+
+    def __init__(self, sweep, row):
+        self.sweep = sweep
+        self.row = row
+        self.id = row["run_id"]
+        self.group = row["group"]
+        self.kind = row.get("kind", "run")
+        self.status = row.get("status", "")
+        self.reason = row.get("reason", "")
+        self.folder = os.path.join(sweep.dir, "runs", self.id)
+        self._history = None
+        self._summary = None
+
+    # Swept or set values, falling back on the run's own summary.
+    def get(self, key):
+        return self.row.get(key, "")
+
+    @property
+    def scheme(self):
+        return self.row.get("summary.scheme") or self.row.get("scheme") or ""
+
+    @property
+    def mesh(self):
+        return self.row.get("summary.mesh") or self.row.get("mesh") or ""
+
+    @property
+    def dt(self):
+        """The run's Δt [s]: summary's dt, else the requested time.dt."""
+        v = fnum(self.row.get("dt"))
+        return v if v is not None else fnum(self.row.get("time.dt"))
+
+    @property
+    def dt_requested(self):
+        return self.row.get("time.dt", "")
+
+    @property
+    def friction(self):
+        v = fnum(self.row.get("friction_coeff"))
+        return v if v is not None else fnum(self.row.get("obstacles[0].friction"))
+
+    def num(self, key):
+        return fnum(self.row.get(key))
+
+    @property
+    def ok(self):
+        return self.status == "ok"
+
+    def history(self):
+        """history.csv as a dict of numpy arrays (None if missing or empty)."""
+        if self._history is None:
+            self._history = read_history(os.path.join(self.folder, "history.csv"))
+        return self._history
+
+    def summary(self):
+        if self._summary is None:
+            path = os.path.join(self.folder, "summary.json")
+            try:
+                with open(path) as f:
+                    self._summary = json.load(f)
+            except (OSError, ValueError):
+                self._summary = {}
+        return self._summary
+
+    def field_files(self):
+        """[(time [s], path)] of the run's VTU files, from fields.pvd or the file names."""
+        fdir = os.path.join(self.folder, "fields")
+        pvd = os.path.join(fdir, "fields.pvd")
+        out = []
+        if os.path.exists(pvd):
+            try:
+                root = ET.parse(pvd).getroot()
+                for ds in root.iter("DataSet"):
+                    out.append((float(ds.get("timestep")), os.path.join(fdir, ds.get("file"))))
+            except (ET.ParseError, TypeError, ValueError):
+                out = []
+        if not out:
+            for p in sorted(glob.glob(os.path.join(fdir, "*.vtu"))):
+                try:
+                    out.append((read_vtu(p)["time"], p))
+                except Exception:  # noqa: BLE001 - an unreadable file is just skipped
+                    pass
+        return [(t, p) for t, p in out if os.path.exists(p)]
+
+    def field_at(self, t, rel=0.02):
+        """The VTU file whose time is nearest t (within rel·t), or None."""
+        best = None
+        for tt, p in self.field_files():
+            d = abs(tt - t)
+            if d <= rel * t + 1e-12 and (best is None or d < best[0]):
+                best = (d, tt, p)
+        return (best[1], best[2]) if best else None
+
+    def label(self):
+        parts = [self.mesh, scheme_name(self.scheme)]
+        if self.dt is not None:
+            parts.append("Δt=" + fmt_dt(self.dt) + " s")
+        return " ".join(p for p in parts if p)
+
+
+class Sweep:
+    """A sweep folder: DIR/summary.csv, DIR/sweep.json, DIR/runs/."""
+
+    def __init__(self, folder):
+        self.dir = os.path.abspath(folder)
+        self.csv = os.path.join(self.dir, "summary.csv")
+        if not os.path.exists(self.csv):
+            raise FileNotFoundError(f"{self.csv}: no summary.csv (not a sweep folder?)")
+        with open(self.csv, newline="") as f:
+            self.rows = list(csv.DictReader(f))
+        self.columns = list(self.rows[0].keys()) if self.rows else []
+        self.runs = [Run(self, r) for r in self.rows]
+        try:
+            with open(os.path.join(self.dir, "sweep.json")) as f:
+                self.meta = json.load(f)
+        except (OSError, ValueError):
+            self.meta = {}
+
+    @property
+    def name(self):
+        return self.meta.get("sweep") or os.path.basename(self.dir)
+
+    def group(self, name, kind="run"):
+        return [r for r in self.runs if r.group == name and (kind is None or r.kind == kind)]
+
+    def find(self, group=None, mesh=None, scheme=None, dt=None, status=None, kind="run"):
+        out = []
+        for r in self.runs:
+            if group is not None and r.group != group:
+                continue
+            if kind is not None and r.kind != kind:
+                continue
+            if mesh is not None and r.mesh != mesh:
+                continue
+            if scheme is not None and r.scheme != scheme:
+                continue
+            if dt is not None and not same(r.dt, dt, 1e-6):
+                continue
+            if status is not None and r.status != status:
+                continue
+            out.append(r)
+        return out
+
+    def version(self):
+        v = self.meta.get("ricochet_version")
+        if not v:
+            for r in self.runs:
+                if r.get("ricochet_version"):
+                    return r.get("ricochet_version")
+        return v or "unknown"
+
+
+def read_history(path):
+    if not os.path.exists(path):
+        return None
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        try:
+            header = next(reader)
+        except StopIteration:
+            return None
+        rows = [row for row in reader if row]
+    if not rows:
+        return None
+    data = np.array([[float(x) if x != "" else math.nan for x in row] for row in rows])
+    return {name: data[:, i] for i, name in enumerate(header)}
+
+
+def _array(elem):
+    return np.array(elem.text.split(), dtype=float) if elem.text else np.zeros(0)
+
+
+def read_vtu(path):
+    """An ASCII VTK XML UnstructuredGrid as written by ricochet (docs/outputs.md):
+    {time, points (n,2) deformed, displacement (n,2), cells [list of index arrays],
+    cell_data {name: array}, point_data {name: array}}."""
+    root = ET.parse(path).getroot()
+    out = {"time": math.nan, "cell_data": {}, "point_data": {}}
+    for fd in root.iter("FieldData"):
+        for da in fd.iter("DataArray"):
+            if da.get("Name") == "TimeValue":
+                out["time"] = float(da.text.split()[0])
+    piece = next(root.iter("Piece"))
+    pd = piece.find("PointData")
+    for da in (list(pd) if pd is not None else []):
+        a = _array(da)
+        nc = int(da.get("NumberOfComponents", "1"))
+        out["point_data"][da.get("Name")] = a.reshape(-1, nc) if nc > 1 else a
+    cd = piece.find("CellData")
+    for da in (list(cd) if cd is not None else []):
+        out["cell_data"][da.get("Name")] = _array(da)
+    pts = _array(piece.find("Points").find("DataArray")).reshape(-1, 3)
+    out["points"] = pts[:, :2]
+    cells = {da.get("Name"): da for da in piece.find("Cells")}
+    conn = _array(cells["connectivity"]).astype(int)
+    offs = _array(cells["offsets"]).astype(int)
+    starts = np.concatenate([[0], offs[:-1]])
+    out["cells"] = [conn[a:b] for a, b in zip(starts, offs)]
+    disp = out["point_data"].get("displacement")
+    out["displacement"] = disp[:, :2] if disp is not None else np.zeros_like(out["points"])
+    return out
+
+
+def read_reference(path=REFERENCE_TOML):
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError):
+        return {}
+
+
+def find_stability_files(paths):
+    """stability.json files: each path is a file, or a folder searched recursively."""
+    out = []
+    for p in paths:
+        if os.path.isfile(p):
+            out.append(os.path.abspath(p))
+        elif os.path.isdir(p):
+            for root, dirs, files in os.walk(p):
+                dirs.sort()
+                if "stability.json" in files:
+                    out.append(os.path.abspath(os.path.join(root, "stability.json")))
+    seen, uniq = set(), []
+    for p in out:
+        if p not in seen:
+            seen.add(p)
+            uniq.append(p)
+    return uniq
+
+
+def read_stability(path):
+    with open(path) as f:
+        d = json.load(f)
+    d["_path"] = path
+    return d
+
+
+def git_commit(path):
+    """(short hash, dirty flag) of the git work tree holding path, or (None, None)."""
+    try:
+        h = subprocess.run(["git", "-C", path, "rev-parse", "--short", "HEAD"],
+                           capture_output=True, text=True, timeout=10)
+        if h.returncode != 0:
+            return None, None
+        s = subprocess.run(["git", "-C", path, "status", "--porcelain", "--untracked-files=no"],
+                           capture_output=True, text=True, timeout=20)
+        return h.stdout.strip(), bool(s.stdout.strip())
+    except (OSError, subprocess.SubprocessError):
+        return None, None
+
+
+SCHEME_NAMES = {
+    "semi_explicit": "semi-explicit",
+    "implicit": "implicit",
+    "explicit_penalty": "explicit penalty",
+    "explicit": "explicit",
+}
+
+
+def scheme_name(s):
+    return SCHEME_NAMES.get(s, s)
+
+
+def fmt_dt(dt):
+    """1e-05 -> '1e-5', 8.25e-06 -> '8.25e-6'."""
+    if dt is None:
+        return "–"
+    m, e = f"{dt:.3g}".split("e") if "e" in f"{dt:.3g}" else (f"{dt:.3g}", None)
+    if e is None:
+        return m
+    return f"{m}e{int(e)}"
+
+
+def fmt_g(x, digits=3):
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "–"
+    if x == 0:
+        return "0"
+    ax = abs(x)
+    if 1e-3 <= ax < 1e5:
+        if ax >= 10 ** (digits - 1):
+            return f"{x:.0f}"
+        return f"{x:.{digits}g}"
+    m, e = f"{x:.{digits - 1}e}".split("e")
+    return f"{m}e{int(e)}"
