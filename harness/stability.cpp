@@ -381,7 +381,10 @@ int stability_command(const std::vector<std::string>& args) {
 
     namespace fs = std::filesystem;
     const fs::path dir(out_dir);
-    if (!out_dir.empty()) fs::remove_all(dir / "trials");  // stale trials of an earlier search
+    if (!out_dir.empty()) {  // an earlier search's results must not describe this one
+      fs::remove(dir / "stability.json");
+      fs::remove_all(dir / "trials");
+    }
     const double estimate = stability_estimate(pc);
     int index = 0;
     const StabilityResult res = find_stable_dt(

@@ -44,8 +44,9 @@ FIG2_TIME = 6e-4
 PAPER_CMD = "build/ricochet sweep cases/paper_table1.toml --out results/paper"
 ACC_CMD = "build/ricochet sweep cases/accuracy.toml --out results/accuracy"
 STAB_CMD = ("build/ricochet stability cases/oblique_plate.toml --set mesh=M1 "
-            "--set scheme=semi_explicit --out results/stability/semi_explicit_M1 "
-            "(and likewise for M2 and the other schemes; --energy-bound 1 for implicit)")
+            "--set scheme=semi_explicit --out results/stability/semi_explicit_M1")
+STAB_MORE = ("(and likewise for mesh M2 and the schemes `implicit`, with `--energy-bound 1`, and "
+             "`explicit_penalty`)")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -67,6 +68,7 @@ class Section:
         self.available = True
         self.missing = ""         # why not available and how to produce it
         self.error = None         # the exception text if building failed
+        self.label = ""           # "Figure 3"
         self.extra = []           # further tables inside a figure section: (title, header, rows)
 
     def row_labels(self):
@@ -99,12 +101,20 @@ def html_table(tid, header, rows):
     out += [f"<th>{md_inline_to_html(h)}</th>" for h in header]
     out.append("</tr></thead><tbody>")
     for r in rows:
-        cls = ' class="diverged"' if any("diverged" in str(c).lower() or "failed" in str(c).lower()
-                                         for c in r[1:]) else ""
-        cells = "".join(f"<td>{md_inline_to_html(str(c))}</td>" for c in r)
-        out.append(f"<tr{cls}>{cells}</tr>")
+        cells = []
+        for c in r:
+            bad = re.match(r"\**(diverged|failed|missing)\b", str(c))
+            cls = ' class="diverged"' if bad else ""
+            cells.append(f"<td{cls}>{md_inline_to_html(str(c))}</td>")
+        out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
     return "\n".join(out)
+
+
+def show_path(p):
+    """A path relative to the repository when inside it, else absolute."""
+    p = os.path.abspath(p)
+    return os.path.relpath(p, REPO) if p.startswith(REPO + os.sep) else p
 
 
 def runs_text(ids, limit=None):
@@ -152,14 +162,14 @@ def fmt_s(x):
 def fmt_paper(v):
     if isinstance(v, str):
         return v
-    return f"{v:g} s"
+    return f"{v:.10g} s"
 
 
 # ---------------------------------------------------------------------------------------------
 # Sections
 
 def sec_table1(ctx):
-    s = Section("table1", "Table 1: CPU time per mesh × Δt × scheme (μ = 0)", "table")
+    s = Section("table1", "CPU time per mesh × Δt × scheme, μ = 0", "table")
     s.paper = "Table 1"
     sw, ref = ctx["main"], ctx["ref"]
     cols, paper = paper_table1(ref)
@@ -204,6 +214,10 @@ def sec_table1(ctx):
     reps = {r.get("repeats") for r in sw.runs if r.get("repeats")}
     rep_txt = (f"medians over {', '.join(sorted(reps))} repeats" if reps and reps != {"1"}
                else "single runs (`--repeat 1`)")
+    jobs = sw.meta.get("jobs")
+    warn = (f" **The sweep ran {jobs} runs at a time (`--jobs {jobs}`), so these timings are "
+            "disturbed; use `--jobs 1` for Table 1.**" if isinstance(jobs, int) and jobs > 1
+            else "")
     s.caption = (
         "Each cell: our time-loop wall time (`wall_seconds` of summary.json, set-up and output "
         f"excluded; {rep_txt}), then the paper's CPU time (reference/cros2010.toml, "
@@ -211,7 +225,7 @@ def sec_table1(ctx):
         "divergence and whether the paper also reports a divergence. The paper's machine and "
         "ours differ by 15 years of hardware, so the speed-up mixes hardware and code; the "
         "ratio table below compares the schemes on one machine. Runs (group `table1` of "
-        f"{sw.dir}): " + runs_text(used) + ".")
+        f"{sw.dir}): " + runs_text(used) + "." + warn)
     # ratio implicit / semi-explicit, ours and paper
     hdr = ["implicit / semi-explicit time"] + [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]
     ours, pap = ["ours"], ["paper"]
@@ -231,7 +245,7 @@ def sec_table1(ctx):
 
 
 def sec_fig1(ctx):
-    s = Section("fig1", "Fig. 1: deformed shapes and von Mises stress, μ = 0.1", "figure")
+    s = Section("fig1", "Deformed shapes with von Mises stress, μ = 0.1", "figure")
     s.paper = "Fig. 1"
     sw = ctx["main"]
     cands = [r for r in sw.find(scheme="semi_explicit", status="ok")
@@ -271,7 +285,7 @@ def F_read(path):
 
 
 def sec_fig2(ctx):
-    s = Section("fig2", "Fig. 2: von Mises stress at t = 0.6 ms, μ = 0", "figure")
+    s = Section("fig2", "Von Mises stress at t = 0.6 ms, μ = 0, semi-explicit and implicit", "figure")
     s.paper = "Fig. 2"
     sw, ref = ctx["main"], ctx["ref"]
     pairs = []
@@ -327,7 +341,7 @@ def sec_fig2(ctx):
 
 
 def sec_fig3(ctx):
-    s = Section("fig3", "Fig. 3: energies on M2, semi-explicit and explicit penalty", "figure")
+    s = Section("fig3", "Energies on M2, semi-explicit and explicit penalty", "figure")
     s.paper = "Fig. 3"
     sw, ref = ctx["main"], ctx["ref"]
     se = finest(ok_runs(sw, "table1", mesh="M2", scheme="semi_explicit")) or \
@@ -371,7 +385,7 @@ def sec_fig3(ctx):
 
 
 def sec_fig4(ctx):
-    s = Section("fig4", "Fig. 4: relative total-energy error over time", "figure")
+    s = Section("fig4", "Relative total-energy error over time", "figure")
     s.paper = "Fig. 4"
     sw, ref = ctx["main"], ctx["ref"]
     runs = ok_runs(sw, "table1")
@@ -409,7 +423,7 @@ def _probe_runs(sw, group):
 
 
 def sec_probe(ctx, sid, group, mu, paper_fig):
-    s = Section(sid, f"{paper_fig}: displacement of point P, μ = {mu:g}", "figure")
+    s = Section(sid, f"Displacement of point P, μ = {mu:g}", "figure")
     s.paper = paper_fig
     sw = ctx["main"]
     runs = _probe_runs(sw, group)
@@ -429,22 +443,22 @@ def sec_probe(ctx, sid, group, mu, paper_fig):
             a, b = pair["semi_explicit"], pair["implicit"]
             dx = np.max(interp_diff(a, b, "P_ux"))
             dy = np.max(interp_diff(a, b, "P_uy"))
-            parts.append(f"on {mesh} the two schemes differ by at most {dx * 1e3:.3g} mm in U_x "
+            parts.append(f"On {mesh} the two schemes differ by at most {dx * 1e3:.3g} mm in U_x "
                          f"and {dy * 1e3:.3g} mm in U_y")
     r0 = runs[0][0]
     h = r0.history()
-    parts.append(f"at 3 ms, {r0.label()} gives U_x = {h['P_ux'][-1] * 1e3:.3g} mm, "
+    parts.append(f"At 3 ms, {r0.label()} gives U_x = {h['P_ux'][-1] * 1e3:.3g} mm, "
                  f"U_y = {h['P_uy'][-1] * 1e3:.3g} mm")
     s.caption = (f"Horizontal U_x and vertical U_y displacement of point P (the lowest point of "
                  f"the arc, the paper does not locate P), implicit and semi-explicit, μ = {mu:g}; "
                  "solid: M2, dashed: M1, each at its smallest Δt in the sweep. "
-                 + "; ".join(parts) + ". Runs (group `" + group + "`): " + runs_text(s.runs)
+                 + ". ".join(parts) + ". Runs (group `" + group + "`): " + runs_text(s.runs)
                  + ".")
     return s
 
 
 def sec_fig7(ctx):
-    s = Section("fig7", "Fig. 7: total energy dissipation with friction (μ = 0.1)", "figure")
+    s = Section("fig7", "Total energy dissipation with friction, μ = 0.1", "figure")
     s.paper = "Fig. 7"
     sw = ctx["main"]
     runs = sorted(ok_runs(sw, "friction"), key=lambda r: (r.mesh, -r.dt, r.scheme))
@@ -476,7 +490,7 @@ def sec_fig7(ctx):
 
 
 def sec_work_precision(ctx):
-    s = Section("work_precision", "Beyond the paper: work-precision diagram", "figure")
+    s = Section("work_precision", "Work-precision diagram (beyond the paper)", "figure")
     acc = ctx.get("acc")
     if acc is None:
         s.available = False
@@ -529,8 +543,19 @@ def sec_work_precision(ctx):
     return s
 
 
+def _hi_reason(d):
+    hi = d.get("smallest_unstable_dt")
+    if hi is None:
+        return "–"
+    for t in d.get("trials", []):
+        if same(t.get("dt"), hi) and not t.get("stable"):
+            why = t.get("reason") or t.get("status") or ""
+            return why.replace("diverged: ", "")[:120] or "–"
+    return d.get("unstable_by") or "–"
+
+
 def sec_stability(ctx):
-    s = Section("stability", "Beyond the paper: stability map", "figure")
+    s = Section("stability", "Stability map: largest stable Δt per mesh and scheme (beyond the paper)", "figure")
     files = ctx.get("stab_files") or []
     entries, rows, bad = [], [], []
     for p in files:
@@ -548,7 +573,7 @@ def sec_stability(ctx):
     if not entries:
         s.available = False
         s.missing = ("no stability.json found" + (f" ({'; '.join(bad)})" if bad else "") +
-                     ". Run `" + STAB_CMD + "` and pass `--stability results/stability` "
+                     ". Run `" + STAB_CMD + "` " + STAB_MORE + " and pass `--stability results/stability` "
                      "(or place the folder next to the paper sweep as `stability/`).")
         return s
     # one point per (mesh, scheme): the narrowest bracket
@@ -573,14 +598,15 @@ def sec_stability(ctx):
         rows.append([f"{e['mesh']} {scheme_name(e['scheme'])}", f"{fmt_g(est, 4)} s",
                      f"{fmt_g(e['lo'], 4)} s" if e["lo"] else "–",
                      f"{fmt_g(e['hi'], 4)} s" if e["hi"] else "–",
-                     f"{e['lo'] / est:.3f}" if e["lo"] and est else "–",
-                     e["outcome"] + (f" ({d.get('unstable_by')})" if d.get("unstable_by") else ""),
+                     f"{e['lo'] / est:.4g}" if e["lo"] and est else "–",
+                     e["outcome"], _hi_reason(d),
                      f"{d.get('criterion', {}).get('energy_error_max_bound', '–')}",
-                     str(d.get("runs", "–")), f"`{os.path.relpath(e['path'])}`"])
+                     str(d.get("runs", "–")), f"`{show_path(e['path'])}`"])
     s.extra.append(("stability_table", "Largest stable Δt found by `ricochet stability` "
                     "(docs/stability.md)",
                     ["mesh, scheme", "estimate Δt_crit", "largest stable", "smallest unstable",
-                     "stable / estimate", "outcome", "energy bound", "trials", "file"], rows))
+                     "stable / estimate", "outcome", "why the smallest unstable Δt failed",
+                     "energy bound", "trials", "file"], rows))
     summ = "; ".join(
         f"{e['mesh']} {scheme_name(e['scheme'])}: "
         + (f"{fmt_g(e['lo'], 3)} s = {e['lo'] / e['estimate']:.3g} × the estimate"
@@ -592,13 +618,16 @@ def sec_stability(ctx):
         "scheme, found by bisection over whole runs, against the estimate Δt_crit = min "
         "L_e/c_p (black bar; for the penalty scheme combined with the spring limit). An arrow: "
         "no unstable Δt up to the search cap. Small squares / black X: the Table 1 runs of the "
-        "paper sweep that finished ok / diverged, at the paper's Δt (dotted lines). " + summ +
-        ". Sources: " + runs_text(os.path.relpath(e["path"]) for e in best.values()) + ".")
+        "paper sweep that finished ok / diverged, at the paper's Δt (dotted lines). The "
+        "table below says why the smallest unstable Δt failed: for the explicit schemes a "
+        "blow-up (inverted element or energy growth), for the implicit scheme a Newton or "
+        "contact iteration that no longer converges. " + summ +
+        ". Sources: " + runs_text(show_path(e["path"]) for e in best.values()) + ".")
     return s
 
 
 def sec_penetration(ctx):
-    s = Section("penetration", "Beyond the paper: penetration over time per scheme", "figure")
+    s = Section("penetration", "Penetration over time per scheme (beyond the paper)", "figure")
     sw = ctx["main"]
     runs = []
     for scheme in ("semi_explicit", "implicit"):
@@ -636,7 +665,7 @@ def sec_penetration(ctx):
 
 
 def sec_failed(ctx):
-    s = Section("failed", "Runs that failed or diverged", "table")
+    s = Section("failed", "Runs that failed or diverged (beyond the paper)", "table")
     s.header = ["run", "sweep", "status", "Δt (s)", "Δt / estimate", "at t (s)", "reason"]
     for sw in [ctx["main"]] + ([ctx["acc"]] if ctx.get("acc") else []):
         for r in sw.runs:
@@ -701,7 +730,7 @@ h1{font-size:1.6em;margin-bottom:.2em} h2{margin-top:1.8em;border-bottom:1px sol
 h3{font-size:1.05em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
-th{background:#f0f0f0} tr.diverged td{background:#fdecea}
+th{background:#f0f0f0} td.diverged{background:#fdecea}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
 code{font-size:.85em;background:#f4f4f4;padding:0 .2em;word-break:break-all}
@@ -719,7 +748,7 @@ def render(ctx, sections):
         md.append(f"- **{k}:** {v}")
     md.append("")
     for s in sections:
-        md.append(f"## {s.number}. {s.title}")
+        md.append(f"## {s.number}: {s.title}")
         md.append("")
         if s.error:
             md.append(f"**Error while building this section:** `{s.error}`")
@@ -732,19 +761,19 @@ def render(ctx, sections):
         if s.kind == "table":
             md.append(md_table(s.header, s.rows) if s.rows else "(no rows)")
             md.append("")
-            md.append(f"*{s.number}.* {s.caption}")
+            md.append(f"*{s.label}.* {s.caption}")
         else:
             png = [f for f in s.files if f.endswith(".png")]
             for f in png:
                 md.append(f"![{s.title}]({f})")
             md.append("")
             others = [f for f in s.files if not f.endswith(".png")]
-            md.append(f"*{s.number}.* {s.caption}" +
+            md.append(f"*{s.label}.* {s.caption}" +
                       (" Also: " + ", ".join(f"[{f}]({f})" for f in others) + "." if others
                        else ""))
         md.append("")
         for tid, title, hdr, rows in s.extra:
-            md.append(f"{title}:")
+            md.append(f"**{title}**")
             md.append("")
             md.append(md_table(hdr, rows) if rows else "(no rows)")
             md.append("")
@@ -763,11 +792,11 @@ def render(ctx, sections):
     h.append("<h2>Contents</h2><ol>")
     for s in sections:
         flag = "" if s.available and not s.error else " — <b>not available</b>"
-        h.append(f'<li><a href="#{s.id}">{html.escape(s.number)}. {html.escape(s.title)}</a>'
+        h.append(f'<li><a href="#{s.id}">{html.escape(s.number)}: {html.escape(s.title)}</a>'
                  f"{flag}</li>")
     h.append("</ol>")
     for s in sections:
-        h.append(f'<section id="sec-{s.id}"><h2 id="{s.id}">{html.escape(s.number)}. '
+        h.append(f'<section id="sec-{s.id}"><h2 id="{s.id}">{html.escape(s.number)}: '
                  f"{html.escape(s.title)}</h2>")
         if s.error:
             h.append(f'<div class="na not-available"><b>Error while building this section:</b> '
@@ -778,8 +807,8 @@ def render(ctx, sections):
                      f"{md_inline_to_html(s.missing)}</div></section>")
             continue
         if s.kind == "table":
-            h.append(html_table(s.id, s.header, s.rows))
-            h.append(f'<p class="caption"><b>{html.escape(s.number)}.</b> '
+            h.append(html_table("tab-" + s.id, s.header, s.rows))
+            h.append(f'<p class="caption"><b>{html.escape(s.label)}.</b> '
                      f"{md_inline_to_html(s.caption)}</p>")
         else:
             h.append("<figure>")
@@ -790,11 +819,11 @@ def render(ctx, sections):
             others = [f for f in s.files if not f.endswith(".png")]
             also = (" Also: " + ", ".join(f'<a href="{html.escape(f)}">{html.escape(f)}</a>'
                                           for f in others) + ".") if others else ""
-            h.append(f"<figcaption><b>{html.escape(s.number)}.</b> "
+            h.append(f"<figcaption><b>{html.escape(s.label)}.</b> "
                      f"{md_inline_to_html(s.caption)}{also}</figcaption></figure>")
         for tid, title, hdr, rows in s.extra:
             h.append(f"<h3>{md_inline_to_html(title)}</h3>")
-            h.append(html_table(tid, hdr, rows))
+            h.append(html_table("tab-" + tid, hdr, rows))
         h.append("</section>")
     h.append("</body></html>")
     with open(os.path.join(out, "index.html"), "w") as f:
@@ -878,8 +907,8 @@ def main(argv=None):
                         f"{main_sweep.meta.get('repeat', '?')})"),
         ("Accuracy sweep", f"`{acc.dir}` ({len(acc.runs)} runs)" if acc else
          ("not available" + (f" ({acc_err})" if acc_err else "") + f": run `{ACC_CMD}`")),
-        ("Stability results", (", ".join(f"`{os.path.relpath(p)}`" for p in stab_files)
-                               if stab_files else f"not available: run `{STAB_CMD}`")),
+        ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
+                               if stab_files else f"not available: run `{STAB_CMD}` {STAB_MORE}")),
         ("Program", f"ricochet {main_sweep.version()}, `{program}`"
                     + (f", built with {'; '.join(builds)}" if builds else "")),
         ("Source tree", (f"commit `{commit}`" + (" with uncommitted changes" if dirty else "")
@@ -907,6 +936,7 @@ def main(argv=None):
             s.number = f"Table {ntab}"
         if s.paper:
             s.number += f" (paper's {s.paper})"
+        s.label = s.number.split(" (")[0]
         for f in s.files:
             if not os.path.getsize(os.path.join(out, f)):
                 s.error = f"empty figure file {f}"

@@ -4,7 +4,6 @@ saves PNG (and SVG for line plots) into the report folder and returns the file n
 Units on every axis; a legend on every figure; the caller writes the caption naming the runs.
 """
 
-import math
 import os
 
 import matplotlib
@@ -16,7 +15,7 @@ from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 import numpy as np  # noqa: E402
 
-from report_io import fmt_dt, fmt_g, scheme_name  # noqa: E402
+from report_io import fmt_dt, scheme_name  # noqa: E402
 
 plt.rcParams.update({
     "font.size": 10,
@@ -81,6 +80,12 @@ def _draw_field(ax, vtu, norm, cmap, edges=True):
     return pc, pts
 
 
+def _sci(cb):
+    cb.formatter.set_powerlimits((0, 0))
+    cb.formatter.set_useMathText(True)
+    cb.update_ticks()
+
+
 def _ground(ax, x0, x1):
     ax.axhline(0.0, color="k", lw=1.2, zorder=3)
     ax.fill_between([x0, x1], [0, 0], [-4, -4], color="0.85", hatch="///", edgecolor="0.5",
@@ -103,9 +108,9 @@ def fig_deformed_shapes(outdir, stem, frames, ref_vtu, title_run):
     axes[0].set_xlim(cx - width / 2, cx + width / 2)
     _ground(axes[0], cx - width / 2, cx + width / 2)
     axes[0].set_title("t = 0 (mesh)")
-    axes[0].annotate("", xy=(cx + 6, 76), xytext=(cx, 86),
+    axes[0].annotate("", xy=(cx - 16, 88), xytext=(cx - 22, 98),
                      arrowprops=dict(arrowstyle="->", color="k", lw=1.2))
-    axes[0].text(cx + 6.5, 80, "v₀ = (3, −5) m/s", fontsize=7.5)
+    axes[0].text(cx - 14, 92, "v₀ = (3, −5) m/s", fontsize=7.5)
     pc = None
     for ax, (t, v) in zip(axes[1:], frames):
         pc, pts = _draw_field(ax, v, norm, CMAP)
@@ -120,9 +125,13 @@ def fig_deformed_shapes(outdir, stem, frames, ref_vtu, title_run):
         ax.set_xlabel("x (mm)")
         ax.grid(False)
     axes[0].set_ylabel("y (mm)")
-    handles = [Line2D([0], [0], color="k", lw=1.2, label="rigid ground y = 0")]
-    axes[0].legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, -0.42), frameon=False)
+    handles = [Line2D([0], [0], color="k", lw=1.2, label="rigid ground y = 0"),
+               Line2D([0], [0], color="0.3", lw=0.6, marker="s", mfc="0.93", ls="none", ms=8,
+                      label="undeformed mesh (t = 0)")]
+    fig.legend(handles=handles, loc="lower center", ncol=2, bbox_to_anchor=(0.45, -0.04),
+               frameon=False)
     cb = fig.colorbar(pc, ax=list(axes), fraction=0.025, pad=0.01)
+    _sci(cb)
     cb.set_label("von Mises stress (Pa), cell maximum")
     fig.suptitle(title_run, y=1.02, fontsize=10)
     return save(fig, outdir, stem, svg=False)
@@ -154,6 +163,7 @@ def fig_von_mises_pair(outdir, stem, panels):
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), frameon=False)
     axes[0].set_ylabel("y (mm)")
     cb = fig.colorbar(pc, ax=list(axes), fraction=0.04, pad=0.02)
+    _sci(cb)
     cb.set_label("von Mises stress (Pa), cell maximum")
     return save(fig, outdir, stem, svg=False)
 
@@ -204,8 +214,9 @@ def fig_energy_error(outdir, stem, runs_by_mesh, bound):
                    label=f"{bound * 100:g} % (paper: error mostly below)")
         ax.set_title(f"mesh {mesh}, μ = 0")
         ax.set_xlabel("time t (ms)")
+        ax.set_xlim(0, None)
         ax.legend(loc="upper left")
-    axes[0].set_ylabel("relative total-energy error |E_t + D − E_t(0)| / E_t(0) (%)")
+    axes[0].set_ylabel("relative total-energy error (%)")
     axes[0].set_ylim(0, ymax)
     return save(fig, outdir, stem)
 
@@ -260,8 +271,8 @@ def fig_penetration(outdir, stem, runs, floor=1e-24):
         y = np.maximum(h["penetration_max"], floor)
         ax.semilogy(ms(h["time"]), y, label=r.label(), **style)
     ax.axhline(floor, color="0.5", lw=0.8)
-    ax.text(0.02, floor * 3, f"zero drawn at {floor:g} m", color="0.4", fontsize=8,
-            transform=ax.get_yaxis_transform())
+    ax.text(0.98, floor * 3, f"zero is drawn at {floor:g} m", color="0.4", fontsize=8,
+            ha="right", transform=ax.get_yaxis_transform())
     ax.set_xlabel("time t (ms)")
     ax.set_ylabel("largest penetration behind the ground (m)")
     ax.set_ylim(floor / 10, None)
@@ -273,7 +284,7 @@ def fig_work_precision(outdir, stem, series):
     """series = {scheme: [(cpu_s, err_P, err_E, dt)]}: error against CPU time, log-log."""
     fig, axes = plt.subplots(1, 2, figsize=(10.5, 4.2))
     for scheme, pts in series.items():
-        pts = sorted(pts)
+        pts = sorted(pts, key=lambda p: -p[3])
         for ax, idx, in ((axes[0], 1), (axes[1], 2)):
             xy = [(p[0], p[idx], p[3]) for p in pts if p[idx] is not None and p[idx] > 0]
             if not xy:
@@ -283,14 +294,16 @@ def fig_work_precision(outdir, stem, series):
             for xx, yy, dt in xy:
                 ax.annotate(fmt_dt(dt), (xx, yy), textcoords="offset points", xytext=(4, 3),
                             fontsize=7, color=color(scheme))
-    axes[0].set_ylabel("max over t of |u_P − u_P,ref| (m)")
+    axes[0].set_ylabel(r"max$_t$ $|u_P - u_{P,\mathrm{ref}}|$ (m)")
     axes[0].set_title("displacement error of point P")
-    axes[1].set_ylabel("max over t of |E_t − E_t,ref| / E_0,ref (–)")
+    axes[1].set_ylabel(r"max$_t$ $|E_t - E_{t,\mathrm{ref}}|\ /\ E_{0,\mathrm{ref}}$ (–)")
     axes[1].set_title("total-energy error")
     for ax in axes:
         ax.set_xlabel("CPU time of the time loop (s)")
-        ax.legend(title="scheme (labels: Δt in s)", loc="upper right")
         ax.grid(True, which="both", alpha=0.25)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, title="scheme (point labels: Δt in s)", loc="upper center",
+               bbox_to_anchor=(0.5, 0.0), ncol=len(labels), frameon=False)
     return save(fig, outdir, stem)
 
 
@@ -313,28 +326,30 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts):
         x = i - 0.4 + w * (j + 0.5)
         c = color(e["scheme"])
         ax.plot([x - w * 0.4, x + w * 0.4], [e["estimate"], e["estimate"]], color="k", lw=2.2)
+        capped = e["outcome"] == "no_unstable_up_to_cap"
         if e["lo"] is not None:
-            ax.plot(x, e["lo"], marker="o", ms=8, color=c, ls="none")
-            ax.annotate(f"{e['lo'] / e['estimate']:.3g}×", (x, e["lo"]),
-                        textcoords="offset points", xytext=(6, -3), fontsize=7.5, color=c)
+            ax.plot(x - w * 0.06, e["lo"], marker=r"$\uparrow$" if capped else "o",
+                    ms=14 if capped else 8, color=c, ls="none")
+            ax.text(x, 0.03, f"{e['lo'] / e['estimate']:.3g}×" + (" (cap)" if capped else ""),
+                    transform=ax.get_xaxis_transform(), ha="center", fontsize=8, color=c)
         if e["hi"] is not None:
-            ax.plot(x, e["hi"], marker="x", ms=8, mew=2, color=c, ls="none")
-        if e["outcome"] == "no_unstable_up_to_cap" and e["lo"] is not None:
-            ax.annotate("", xy=(x, e["lo"] * 3), xytext=(x, e["lo"]),
-                        arrowprops=dict(arrowstyle="->", color=c, lw=1.5))
+            ax.plot(x + w * 0.16, e["hi"], marker="x", ms=8, mew=2, color=c, ls="none")
     for mesh, scheme, dt, status in table1_marks:
         if scheme not in schemes:
             continue
         i = meshes.index(mesh)
         j = schemes.index(scheme)
-        x = i - 0.4 + w * (j + 0.5) + w * 0.3
+        x = i - 0.4 + w * (j + 0.5) - w * 0.34
         ax.plot(x, dt, marker="s" if status == "ok" else "X", ms=5,
                 mfc="none" if status == "ok" else "k", mec="k", ls="none")
     ax.set_xticks(range(len(meshes)))
     ax.set_xticklabels(meshes)
     ax.set_xlim(-0.5, len(meshes) - 0.5 + 0.55)
     ax.set_yscale("log")
-    ax.set_xlabel("mesh")
+    lows = [e["estimate"] for e in entries if e["estimate"]] + list(table1_dts)
+    if lows:
+        ax.set_ylim(min(lows) / 5, None)
+    ax.set_xlabel("mesh (numbers at the bottom: largest stable Δt / estimate)")
     ax.set_ylabel("time step Δt (s)")
     handles = [Line2D([0], [0], color=color(s), lw=6, label=scheme_name(s)) for s in schemes]
     handles += [
@@ -342,8 +357,8 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts):
         Line2D([0], [0], marker="o", color="0.3", ls="none", ms=7, label="largest stable Δt"),
         Line2D([0], [0], marker="x", color="0.3", ls="none", ms=7, mew=2,
                label="smallest unstable Δt"),
-        Line2D([0], [0], marker=r"$\uparrow$", color="0.3", ls="none", ms=9,
-               label="no unstable Δt up to the cap"),
+        Line2D([0], [0], marker=r"$\uparrow$", color="0.3", ls="none", ms=11,
+               label="stable up to the search cap (no instability found)"),
         Line2D([0], [0], marker="s", mfc="none", mec="k", ls="none", ms=5,
                label="paper sweep run: ok"),
         Line2D([0], [0], marker="X", mfc="k", mec="k", ls="none", ms=5,
@@ -353,10 +368,3 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts):
     ax.grid(True, which="both", axis="y", alpha=0.25)
     ax.grid(False, axis="x")
     return save(fig, outdir, stem)
-
-
-def fmt_run_list(runs):
-    return ", ".join(f"`{r.id}`" for r in runs)
-
-
-__all__ = [n for n in dir() if n.startswith("fig_")] + ["color", "fmt_g", "math"]

@@ -302,12 +302,13 @@ def scheme_name(s):
 
 
 def fmt_dt(dt):
-    """1e-05 -> '1e-5', 8.25e-06 -> '8.25e-6'."""
+    """1e-05 -> '1e-5', 8.25e-06 -> '8.25e-6', 0.003 -> '0.003'."""
     if dt is None:
         return "–"
-    m, e = f"{dt:.3g}".split("e") if "e" in f"{dt:.3g}" else (f"{dt:.3g}", None)
-    if e is None:
-        return m
+    if dt == 0 or 1e-3 <= abs(dt) < 1e3:
+        return f"{dt:.3g}"
+    m, e = f"{dt:.2e}".split("e")
+    m = m.rstrip("0").rstrip(".")
     return f"{m}e{int(e)}"
 
 

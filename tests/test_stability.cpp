@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
+
 #include "harness/case_setup.hpp"
 #include "harness/input_error.hpp"
 #include "harness/stability.hpp"
@@ -314,6 +316,26 @@ scale_factor = 1.0
   const double de = pc.model.critical_dt, dp = pc.penalty_critical_dt;
   EXPECT_NEAR(stability_estimate(pc), 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp)), 1e-15);
   EXPECT_LT(stability_estimate(pc), de);
+}
+
+// The command line as the `ricochet` program runs it (harness/main.cpp wires the word).
+TEST_F(StabilityTest, ProgramRunsTheCommand) {
+  auto run = [](const std::string& args, std::string& output) {
+    const std::string cmd = std::string(RICOCHET_BINARY) + " stability " + args + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    char buf[4096];
+    output.clear();
+    while (fgets(buf, sizeof buf, p)) output += buf;
+    const int raw = pclose(p);
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  };
+  std::string output;
+  EXPECT_EQ(run(file_ + " --max-runs 2 --quiet --out " + out(), output), 0) << output;
+  EXPECT_NE(output.find("stab_square: explicit m q4  estimate 6.847e-05 s  largest stable 6.847e-05 s (1 x)"),
+            std::string::npos) << output;
+  EXPECT_TRUE(fs::exists(fs::path(out()) / "stability.json"));
+  EXPECT_EQ(run(file_ + " --tolerance 0", output), 2) << output;
+  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
 }
 
 TEST_F(StabilityTest, RejectsBadInput) {

@@ -1,0 +1,309 @@
+#!/usr/bin/python3
+"""Smoke test of reports/make_report.py on tiny sweeps (registered with CTest as report_smoke).
+
+Builds, in a temporary folder and with the given ricochet binary:
+  * a tiny paper sweep: the groups of cases/paper_table1.toml (table1, penalty, friction) on the
+    oblique plate with coarse meshes (M1 4 x 8, M2 6 x 14 cells), all the paper's Δt;
+  * a tiny accuracy sweep (two schemes, a reference run each, one diverged run);
+  * two stability searches (semi-explicit bracketed, implicit up to the cap).
+Then runs the report twice: without the accuracy and stability sources (those two sections
+must say "not available" and how to produce them, everything else must be there), and with
+them (every section available). Checks that every figure file exists and is non-empty, that
+every table has its expected rows (computed here from the sweeps' summary.csv), and that every
+figure's caption names its runs.
+
+    /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
+"""
+
+import csv
+import html.parser
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, ".."))
+SCRIPT = os.path.join(REPO, "reports", "make_report.py")
+BASE = os.path.join(REPO, "cases", "oblique_plate.toml")
+PY = sys.executable or "/usr/bin/python3"
+
+BINARY = None
+
+COARSE = ('"meshes.M1.nx" = 4, "meshes.M1.ny" = 8, "meshes.M2.nx" = 6, "meshes.M2.ny" = 14')
+
+PAPER_SWEEP = f"""
+name = "tiny_paper"
+description = "report smoke test: the paper sweep's groups on coarse meshes"
+base = "{BASE}"
+set = {{ "output.interval" = 5e-5, {COARSE} }}
+
+[[group]]
+name = "table1"
+set = {{ "obstacles[0].friction" = 0.0 }}
+cross = {{ mesh = ["M1", "M2"], "time.dt" = [1e-4, 1e-5, 1e-6], scheme = ["semi_explicit", "implicit"] }}
+
+[[group]]
+name = "penalty"
+set = {{ "obstacles[0].friction" = 0.0, scheme = "explicit_penalty", mesh = "M2", "time.dt" = "auto" }}
+
+[[group]]
+name = "friction"
+set = {{ "obstacles[0].friction" = 0.1 }}
+cross = {{ mesh = ["M1", "M2"], "time.dt" = [1e-5, 1e-6], scheme = ["semi_explicit", "implicit"] }}
+"""
+
+ACC_SWEEP = f"""
+name = "tiny_accuracy"
+base = "{BASE}"
+set = {{ mesh = "M1", "obstacles[0].friction" = 0.0, "output.interval" = 5e-5, "output.fields" = [], {COARSE} }}
+
+[[group]]
+name = "semi_explicit"
+set = {{ scheme = "semi_explicit" }}
+cross = {{ "time.dt" = [2e-5, 1e-5, 5e-6, 1e-4] }}
+reference = {{ "time.dt" = 1e-6 }}
+
+[[group]]
+name = "implicit"
+set = {{ scheme = "implicit" }}
+cross = {{ "time.dt" = [1e-4, 2e-5, 1e-5] }}
+reference = {{ "time.dt" = 1e-6 }}
+"""
+
+
+def run(cmd, ok=(0,), **kw):
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
+    if p.returncode not in ok:
+        raise AssertionError(f"{' '.join(cmd)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
+    return p
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+class Tables(html.parser.HTMLParser):
+    """Tables by id: a list of body rows, each a list of cell texts; and sections' raw text."""
+
+    def __init__(self):
+        super().__init__()
+        self.tables = {}
+        self.cur = None
+        self.row = None
+        self.cell = None
+        self.in_body = False
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "table" and a.get("id"):
+            self.cur = a["id"]
+            self.tables[self.cur] = []
+        elif tag == "tbody" and self.cur:
+            self.in_body = True
+        elif tag == "tr" and self.cur and self.in_body:
+            self.row = []
+        elif tag == "td" and self.row is not None:
+            self.cell = ""
+
+    def handle_endtag(self, tag):
+        if tag == "td" and self.cell is not None:
+            self.row.append(self.cell.strip())
+            self.cell = None
+        elif tag == "tr" and self.row is not None:
+            self.tables[self.cur].append(self.row)
+            self.row = None
+        elif tag == "tbody":
+            self.in_body = False
+        elif tag == "table":
+            self.cur = None
+
+    def handle_data(self, data):
+        if self.cell is not None:
+            self.cell += data
+
+
+def section_html(text, sid):
+    start = text.index(f'<section id="sec-{sid}">')
+    return text[start:text.index("</section>", start)]
+
+
+class ReportSmoke(unittest.TestCase):
+    tmp = None
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="ricochet_report_")
+        t = cls.tmp
+        with open(os.path.join(t, "paper.toml"), "w") as f:
+            f.write(PAPER_SWEEP)
+        with open(os.path.join(t, "accuracy.toml"), "w") as f:
+            f.write(ACC_SWEEP)
+        cls.paper = os.path.join(t, "sweeps", "paper")
+        cls.acc = os.path.join(t, "other", "acc")
+        cls.stab = os.path.join(t, "other", "stab")
+        run([BINARY, "sweep", os.path.join(t, "paper.toml"), "--out", cls.paper, "--jobs", "2",
+             "--quiet"])
+        run([BINARY, "sweep", os.path.join(t, "accuracy.toml"), "--out", cls.acc, "--jobs", "2",
+             "--quiet"])
+        coarse = ["--set", "meshes.M1.nx=4", "--set", "meshes.M1.ny=8"]
+        run([BINARY, "stability", BASE, *coarse, "--end", "1e-3", "--max-runs", "8",
+             "--out", os.path.join(cls.stab, "semi_explicit_M1"), "--quiet"], ok=(0, 4, 5))
+        run([BINARY, "stability", BASE, *coarse, "--set", "scheme=implicit", "--energy-bound", "1",
+             "--end", "1e-3", "--max-runs", "8", "--out", os.path.join(cls.stab, "implicit_M1"),
+             "--quiet"], ok=(0, 4, 5))
+        # 1: no accuracy / stability sources, default output folder DIR/report
+        run([PY, SCRIPT, cls.paper, "--no-discover"])
+        cls.out_bare = os.path.join(cls.paper, "report")
+        # 2: every source
+        cls.out_full = os.path.join(t, "full_report")
+        run([PY, SCRIPT, cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
+             "--out", cls.out_full])
+
+    @classmethod
+    def tearDownClass(cls):
+        if cls.tmp and not os.environ.get("KEEP_REPORT_TMP"):
+            shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def manifest(self, out):
+        with open(os.path.join(out, "manifest.json")) as f:
+            return json.load(f)
+
+    def check_files(self, out):
+        man = self.manifest(out)
+        with open(os.path.join(out, "index.html")) as f:
+            page = f.read()
+        for s in man["sections"]:
+            self.assertIsNone(s["error"], s["id"])
+            if s["kind"] == "figure" and s["available"]:
+                self.assertTrue(any(f.endswith(".png") for f in s["files"]), s["id"])
+            for name in s["files"]:
+                path = os.path.join(out, name)
+                self.assertTrue(os.path.isfile(path), path)
+                self.assertGreater(os.path.getsize(path), 1000, path)
+                with open(path, "rb") as f:
+                    head = f.read(2000)
+                if name.endswith(".png"):
+                    self.assertEqual(head[:8], b"\x89PNG\r\n\x1a\n", path)
+                    self.assertIn(f'src="{name}"', page)
+                elif name.endswith(".svg"):
+                    self.assertIn(b"<svg", head, path)
+        self.assertGreater(os.path.getsize(os.path.join(out, "report.md")), 1000)
+        return man, page
+
+    def test_bare_report_says_what_is_missing(self):
+        man, page = self.check_files(self.out_bare)
+        by_id = {s["id"]: s for s in man["sections"]}
+        for sid in ("work_precision", "stability"):
+            self.assertFalse(by_id[sid]["available"], sid)
+            sec = section_html(page, sid)
+            self.assertIn("not-available", sec)
+            self.assertIn("build/ricochet", sec)  # how to produce it
+        self.assertIn("cases/accuracy.toml", section_html(page, "work_precision"))
+        self.assertIn("ricochet stability", section_html(page, "stability").replace(
+            "build/ricochet stability", "ricochet stability"))
+        for sid, s in by_id.items():
+            if sid not in ("work_precision", "stability"):
+                self.assertTrue(s["available"], f"{sid}: {s['missing']}")
+        with open(os.path.join(self.out_bare, "report.md")) as f:
+            md = f.read()
+        self.assertEqual(md.count("**Not available:**"), 2)
+
+    def test_full_report_has_every_section(self):
+        man, page = self.check_files(self.out_full)
+        expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
+                    "work_precision", "stability", "penetration", "failed", "runs"}
+        by_id = {s["id"]: s for s in man["sections"]}
+        self.assertEqual(set(by_id), expected)
+        for sid, s in by_id.items():
+            self.assertTrue(s["available"], f"{sid}: {s['missing']}")
+        self.assertNotIn("not-available", page)
+        # figures: expected files, caption names the runs
+        for sid, stem in (("fig1", "fig1_deformed_shapes"), ("fig2", "fig2_von_mises_0.6ms"),
+                          ("fig3", "fig3_energies_M2"), ("fig4", "fig4_energy_error"),
+                          ("fig5", "fig5_P_displacement_mu0"),
+                          ("fig6", "fig6_P_displacement_mu0.1"),
+                          ("fig7", "fig7_friction_dissipation"),
+                          ("work_precision", "work_precision"), ("stability", "stability_map"),
+                          ("penetration", "penetration")):
+            self.assertIn(stem + ".png", by_id[sid]["files"], sid)
+            self.assertTrue(by_id[sid]["runs"], sid)
+            sec = section_html(page, sid)
+            cap = sec[sec.index("<figcaption>"):sec.index("</figcaption>")]
+            for rid in by_id[sid]["runs"]:
+                self.assertIn(rid, cap, f"{sid} caption does not name {rid}")
+        # Fig. 3 holds both the semi-explicit and the penalty run
+        self.assertIn("penalty/000", by_id["fig3"]["runs"])
+        # Fig. 2 is M2 at the smallest Δt, both schemes
+        self.assertEqual(sorted(by_id["fig2"]["runs"]),
+                         ["table1/010-mesh=M2_time.dt=1e-6_scheme=semi_explicit",
+                          "table1/011-mesh=M2_time.dt=1e-6_scheme=implicit"])
+
+    def test_tables_have_expected_rows(self):
+        with open(os.path.join(self.out_full, "index.html")) as f:
+            parser = Tables()
+            parser.feed(f.read())
+        tables = parser.tables
+        main = read_csv(os.path.join(self.paper, "summary.csv"))
+        acc = read_csv(os.path.join(self.acc, "summary.csv"))
+
+        def first(tid):
+            return [r[0] for r in tables[tid]]
+
+        self.assertEqual(first("tab-table1"), ["Semi-explicit", "Implicit"])
+        t1 = tables["tab-table1"]
+        self.assertEqual([len(r) for r in t1], [7, 7])  # label + M1/M2 x 3 dt
+        # the paper's values beside ours; diverged cells marked
+        self.assertIn("paper 5.68 s", t1[0][2])
+        self.assertIn("paper 26977.02 s", t1[1][6])
+        self.assertIn("diverged", t1[0][1])  # M1, 1e-4 diverges on the coarse mesh too
+        self.assertIn("speed-up", t1[1][1])
+        self.assertEqual(first("tab-table1_ratio"), ["ours", "paper"])
+        self.assertEqual(first("tab-vm_max"), ["semi-explicit", "implicit"])
+        friction_ok = {r["run_id"] for r in main if r["group"] == "friction" and r["status"] == "ok"}
+        self.assertEqual({r[-1] for r in tables["tab-fig7_table"]}, friction_ok)
+        acc_ok = [r["run_id"] for r in acc
+                  if r["kind"] == "run" and r["status"] == "ok" and r["error_probe_P"]]
+        self.assertEqual(first("tab-work_precision_data"), acc_ok)
+        self.assertEqual(len(tables["tab-stability_table"]), 2)
+        self.assertEqual(first("tab-penetration_table"),
+                         [r["run_id"] for r in main if r["status"] == "ok"])
+        not_ok = [r["run_id"] for r in main + acc if r["status"] != "ok"]
+        self.assertTrue(not_ok)  # the tiny sweeps have diverged runs
+        self.assertEqual(first("tab-failed"), not_ok)
+        self.assertEqual(first("tab-runs"), [r["run_id"] for r in main])
+        # the manifest agrees with the page
+        man = self.manifest(self.out_full)
+        for s in man["sections"]:
+            for t in s["tables"]:
+                self.assertEqual(len(t["rows"]), len(tables["tab-" + t["id"]]), t["id"])
+
+    def test_markdown_table1(self):
+        with open(os.path.join(self.out_full, "report.md")) as f:
+            md = f.read()
+        self.assertIn("| scheme | M1, Δt = 1e-4 s | M1, Δt = 1e-5 s | M1, Δt = 1e-6 s | "
+                      "M2, Δt = 1e-4 s | M2, Δt = 1e-5 s | M2, Δt = 1e-6 s |", md)
+        self.assertIn("| **Semi-explicit** |", md)
+        self.assertIn("| **Implicit** |", md)
+        self.assertNotIn("Not available", md)
+
+
+def main():
+    global BINARY
+    args = sys.argv[1:]
+    BINARY = (args.pop(0) if args and not args[0].startswith("-") else None) or \
+        os.environ.get("RICOCHET_BINARY") or os.path.join(REPO, "build", "ricochet")
+    if not os.access(BINARY, os.X_OK):
+        print(f"test_report: ricochet binary '{BINARY}' not found or not executable",
+              file=sys.stderr)
+        return 1
+    prog = unittest.main(argv=[sys.argv[0]] + args, exit=False, verbosity=2)
+    return 0 if prog.result.wasSuccessful() else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
