@@ -533,7 +533,9 @@ def sec_work_precision(ctx):
         "largest total-energy difference to the reference (`error_energy`). References "
         "(same scheme, Δt = " + ", ".join(sorted({fmt_dt(r.num('reference_dt')) for r in acc.runs
                                                   if r.num('reference_dt')})) + " s): "
-        + runs_text(refs) + ". Observed order of the P error in Δt (least squares): "
+        + runs_text(refs) + ". Each scheme is compared with its own reference, so these are "
+        "time-discretisation errors, not differences between the schemes' contact models "
+        "(the penalty scheme's penetration is in its reference too). Observed order of the P error in Δt (least squares): "
         + (", ".join(orders) if orders else "–") + "."
         + (f" Not drawn (not ok or no error): {runs_text(r.id for r in skipped)}." if skipped
            else "") + f" Runs of {acc.dir}: " + runs_text(used) + ".")
