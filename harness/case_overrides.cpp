@@ -15,7 +15,8 @@ bool is_index(const std::string& s) {
   return true;
 }
 
-// "bodies[0].material.young" or "bodies.0.material.young" -> {"bodies", "0", "material", "young"}
+}  // namespace
+
 std::vector<std::string> split_key(const std::string& key) {
   std::vector<std::string> parts;
   std::string cur;
@@ -30,8 +31,6 @@ std::vector<std::string> split_key(const std::string& key) {
   if (!cur.empty()) parts.push_back(cur);
   return parts;
 }
-
-}  // namespace
 
 std::string apply_override(toml::table& doc, const std::string& file, const std::string& arg) {
   const std::string context = file + ": --set " + arg + ": ";

@@ -114,6 +114,9 @@ struct CaseSpec {
 // taken as a string), validates everything and returns the typed case. Throws InputError.
 CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides);
 
+// "bodies[0].material.young" or "bodies.0.material.young" -> {"bodies", "0", "material", "young"}.
+std::vector<std::string> split_key(const std::string& key);
+
 // Applies one "key.path=value" override to a parsed document (exposed for tests).
 // Returns the dotted key. Throws InputError naming the argument.
 std::string apply_override(toml::table& doc, const std::string& file, const std::string& arg);

@@ -13,13 +13,6 @@ namespace {
 
 const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
 
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
-}
-
 std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
   const Model& m = pc.model;
   VtuData d;
@@ -64,6 +57,24 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
 }
 
 }  // namespace
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+Json build_info() {
+  Json build = Json::object();
+  build["compiler"] = __VERSION__;
+#ifdef NDEBUG
+  build["build_type"] = "release";
+#else
+  build["build_type"] = "debug";
+#endif
+  return build;
+}
 
 Json run_summary(const PreparedCase& pc, const RunResult& r) {
   const CaseSpec& c = pc.spec;
@@ -169,14 +180,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["probes"] = probes;
   j["history_rows"] = static_cast<long>(h.rows());
   j["field_files"] = static_cast<long>(r.fields.size());
-  Json build = Json::object();
-  build["compiler"] = __VERSION__;
-#ifdef NDEBUG
-  build["build_type"] = "release";
-#else
-  build["build_type"] = "debug";
-#endif
-  j["build"] = build;
+  j["build"] = build_info();
   j["written_at"] = utc_now();
   return j;
 }

@@ -12,6 +12,11 @@
 namespace ricochet {
 
 Json run_summary(const PreparedCase& pc, const RunResult& r);
+
+// {compiler, build_type} of this program, and the current UTC time (ISO 8601): what every
+// written result records about how it was obtained.
+Json build_info();
+std::string utc_now();
 void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r);
 std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir);
 

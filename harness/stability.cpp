@@ -46,13 +46,6 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
-}
-
 // "M1" for one body; bodies joined with "+" otherwise (as summary.json does).
 std::string joined(const CaseSpec& c, bool element) {
   std::string s;
@@ -294,14 +287,7 @@ Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const
     trials.push_back(q);
   }
   j["trials"] = trials;
-  Json build = Json::object();
-  build["compiler"] = __VERSION__;
-#ifdef NDEBUG
-  build["build_type"] = "release";
-#else
-  build["build_type"] = "debug";
-#endif
-  j["build"] = build;
+  j["build"] = build_info();
   j["written_at"] = utc_now();
   return j;
 }

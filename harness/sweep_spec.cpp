@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "harness/case_spec.hpp"
 #include "harness/csv_writer.hpp"
 #include "harness/input_error.hpp"
 #include "harness/toml_reader.hpp"
@@ -255,17 +256,7 @@ std::string display_text(const toml::node& v) {
 }
 
 std::string canonical_key(const std::string& key) {
-  std::vector<std::string> parts;
-  std::string cur;
-  for (char ch : key) {
-    if (ch == '.' || ch == '[' || ch == ']') {
-      if (!cur.empty()) parts.push_back(cur);
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  if (!cur.empty()) parts.push_back(cur);
+  const std::vector<std::string> parts = split_key(key);
   std::string out;
   for (const auto& p : parts) {
     if (all_digits(p)) out += "[" + p + "]";

@@ -141,9 +141,9 @@ void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacle
 }
 
 double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
-                   const ContactState& c, const Eigen::VectorXd& u) {
+                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
   double depth = 0.0;
-  for (const ContactCandidate& cc : c.candidates) {
+  for (const ContactCandidate& cc : candidates) {
     const LineObstacle& ob = obstacles[cc.obstacle];
     const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
     depth = std::max(depth, -ob.normal.dot(x - ob.point));

@@ -77,8 +77,9 @@ ContactState make_contact_state(const Model& model, const std::vector<LineObstac
 void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
                    const ContactSettings& settings, ContactState& c, State& s);
 
-// Largest depth of any candidate node inside its obstacle at u (>= 0) [m].
+// Largest depth of any candidate node behind its obstacle at u (>= 0) [m]. Every scheme
+// measures penetration with this, on its own candidate list.
 double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
-                   const ContactState& c, const Eigen::VectorXd& u);
+                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u);
 
 }  // namespace ricochet

@@ -7,24 +7,6 @@
 namespace ricochet {
 namespace {
 
-template <int N>
-inline Eigen::Matrix<double, N, 2> gather(const double* a, const std::array<int, N>& c) {
-  Eigen::Matrix<double, N, 2> e;
-  for (int i = 0; i < N; ++i) {
-    e(i, 0) = a[2 * c[i]];
-    e(i, 1) = a[2 * c[i] + 1];
-  }
-  return e;
-}
-
-template <int N>
-inline void scatter(double* f, const std::array<int, N>& c, const Eigen::Matrix<double, N, 2>& fe) {
-  for (int i = 0; i < N; ++i) {
-    f[2 * c[i]] += fe(i, 0);
-    f[2 * c[i] + 1] += fe(i, 1);
-  }
-}
-
 // Elements whose cells share one deformation gradient per integration point: T3 and Q4 2x2.
 template <bool kEnergy, class Mat>
 void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {

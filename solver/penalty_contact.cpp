@@ -199,15 +199,4 @@ void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacle
   }
 }
 
-double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
-                   const PenaltyState& p, const Eigen::VectorXd& u) {
-  double depth = 0.0;
-  for (const ContactCandidate& cc : p.candidates) {
-    const LineObstacle& ob = obstacles[cc.obstacle];
-    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
-    depth = std::max(depth, -ob.normal.dot(x - ob.point));
-  }
-  return depth;
-}
-
 }  // namespace ricochet

@@ -116,8 +116,5 @@ double penalty_stable_time_step(const Model& model, const PenaltyState& p, doubl
 void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
                    PenaltyState& p, State& s);
 
-// Largest depth of any candidate node inside its obstacle at u (>= 0) [m].
-double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
-                   const PenaltyState& p, const Eigen::VectorXd& u);
 
 }  // namespace ricochet

@@ -52,17 +52,6 @@ std::vector<long> sample_steps(const RunSettings& s, long planned) {
   return steps;
 }
 
-double penetration_of(const Model& model, const std::vector<LineObstacle>& obstacles,
-                      const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
-  double depth = 0.0;
-  for (const ContactCandidate& cc : candidates) {
-    const LineObstacle& ob = obstacles[cc.obstacle];
-    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
-    depth = std::max(depth, -ob.normal.dot(x - ob.point));
-  }
-  return depth;
-}
-
 }  // namespace
 
 RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
@@ -129,7 +118,7 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
   if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
     cell_von_mises(model_, s.u.data(), cell_vm_.data());
     const double vm = cell_vm_.empty() ? 0.0 : *std::max_element(cell_vm_.begin(), cell_vm_.end());
-    const double depth = candidates_ ? penetration_of(model_, settings_.obstacles, *candidates_, s.u) : 0.0;
+    const double depth = candidates_ ? penetration(model_, settings_.obstacles, *candidates_, s.u) : 0.0;
     const Vec2 p = linear_momentum(model_, s);
     auto& v = result_.history.values;
     v.insert(v.end(), {s.time, e.kinetic, e.strain, e.hourglass, e.external_work,

@@ -9,24 +9,6 @@
 namespace ricochet {
 namespace {
 
-template <int N>
-inline Eigen::Matrix<double, N, 2> gather(const double* a, const std::array<int, N>& c) {
-  Eigen::Matrix<double, N, 2> e;
-  for (int i = 0; i < N; ++i) {
-    e(i, 0) = a[2 * c[i]];
-    e(i, 1) = a[2 * c[i] + 1];
-  }
-  return e;
-}
-
-template <int N>
-inline void scatter(double* f, const std::array<int, N>& c, const Eigen::Matrix<double, N, 2>& fe) {
-  for (int i = 0; i < N; ++i) {
-    f[2 * c[i]] += fe(i, 0);
-    f[2 * c[i] + 1] += fe(i, 1);
-  }
-}
-
 // The (2N x 2N) element matrix by displacement components: xx(I, K) is the entry of DOFs
 // (I, x)-(K, x), xy(I, K) of (I, x)-(K, y), yy(I, K) of (I, y)-(K, y); by symmetry the entry
 // (I, y)-(K, x) is xy(K, I), so three N x N blocks hold everything.

@@ -338,7 +338,7 @@ struct Impact {
       r.tangential_force = c.tangential_force;
       r.contact_work = c.contact_work;
       r.friction_dissipation = c.friction_dissipation;
-      r.penetration = penetration(model, obstacles, c, s.u);
+      r.penetration = penetration(model, obstacles, c.candidates, s.u);
       r.min_gap = (model.ref.row(1).transpose() + s.u(Eigen::seq(1, Eigen::last, 2))).minCoeff();
       r.min_contact_vn = r.min_contact_vt = std::numeric_limits<double>::infinity();
       r.max_contact_vt = -std::numeric_limits<double>::infinity();
