@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -50,9 +51,19 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
 
 MaterialSpec read_material(const TableReader& t) {
   MaterialSpec m;
-  m.model = t.choice("model", "saint_venant_kirchhoff", {"saint_venant_kirchhoff", "neo_hookean"});
-  m.young = t.number("young", Range::positive());
-  m.poisson = t.number("poisson", Range{-1.0, 0.5, true, true});
+  m.model = t.choice("model", "saint_venant_kirchhoff",
+                     {"saint_venant_kirchhoff", "neo_hookean", "blatz_ko", "mooney_rivlin"});
+  if (m.model == "blatz_ko") {
+    m.shear_modulus = t.number("shear_modulus", Range::positive());
+  } else if (m.model == "mooney_rivlin") {
+    m.c10 = t.number("c10", Range::non_negative());
+    m.c01 = t.number("c01", Range::non_negative());
+    if (!(m.c10 + m.c01 > 0.0)) t.fail("c01", "c10 + c01 must be > 0 (small-strain shear modulus 2 (c10 + c01))");
+    m.bulk_modulus = t.number("bulk_modulus", Range::positive());
+  } else {
+    m.young = t.number("young", Range::positive());
+    m.poisson = t.number("poisson", Range{-1.0, 0.5, true, true});
+  }
   m.density = t.number("density", Range::positive());
   t.finish();
   return m;
@@ -125,21 +136,71 @@ ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
   return p;
 }
 
-ObstacleSpec read_obstacle(const TableReader& t, int index) {
+// The vertices of a polyline, `points = [[x, y], ...]`, from the raw TOML node (TableReader
+// reads single pairs only). Errors name the key and its line through t.fail().
+std::vector<Vec2, Eigen::aligned_allocator<Vec2>> read_points(const TableReader& t, const toml::node* n) {
+  if (!n) t.fail("points", "missing required key for type = \"polyline\" (the vertices [[x, y], ...])");
+  const toml::array* a = n->as_array();
+  if (!a) t.fail("points", "expected an array of points [[x, y], ...]");
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> pts;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::array* q = (*a)[i].as_array();
+    if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
+      t.fail("points", "element " + std::to_string(i) + ": expected a point [x, y] of two numbers");
+    const Vec2 v(*(*q)[0].value<double>(), *(*q)[1].value<double>());
+    if (!v.allFinite()) t.fail("points", "element " + std::to_string(i) + ": expected finite numbers");
+    if (!pts.empty() && !((v - pts.back()).norm() > 0.0))
+      t.fail("points", "elements " + std::to_string(i - 1) + " and " + std::to_string(i) +
+                           " coincide (zero-length segment)");
+    pts.push_back(v);
+  }
+  if (pts.size() < 2)
+    t.fail("points", "a polyline needs at least 2 points; got " + std::to_string(pts.size()));
+  return pts;
+}
+
+// `raw_points`: the obstacle's `points` node, if any (read from the document directly).
+ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* raw_points) {
   ObstacleSpec o;
   o.where = t.path();
   o.name = t.text("name", "obstacle" + std::to_string(index));
-  t.choice("type", "line", {"line"});
-  o.point = t.vec2("point", Vec2::Zero());
-  o.normal = t.vec2("normal");
-  if (!(o.normal.norm() > 0.0)) t.fail("normal", "must be a non-zero vector (the outward normal)");
-  o.normal.normalize();
+  const std::string type = t.choice("type", "line", {"line", "circle", "polyline"});
+  std::vector<std::string> keys{"name", "type", "friction", "friction_by_body"};
+  if (type == "line") {
+    o.point = t.vec2("point", Vec2::Zero());
+    o.normal = t.vec2("normal");
+    if (!(o.normal.norm() > 0.0)) t.fail("normal", "must be a non-zero vector (the outward normal)");
+    o.normal.normalize();
+    o.shape.kind = ObstacleKind::line;
+    o.shape.point = o.point;
+    o.shape.normal = o.normal;
+    keys.insert(keys.end(), {"point", "normal"});
+  } else if (type == "circle") {
+    o.shape.kind = ObstacleKind::circle;
+    o.shape.center = t.vec2("center");
+    o.shape.radius = t.number("radius", Range::positive());
+    o.shape.inside = t.boolean("inside", false);
+    keys.insert(keys.end(), {"center", "radius", "inside"});
+  } else {
+    o.shape.kind = ObstacleKind::polyline;
+    o.shape.points = read_points(t, raw_points);
+    o.shape.left = t.choice("side", "left", {"left", "right"}) == "left";
+    keys.insert(keys.end(), {"points", "side"});
+  }
+  o.shape.name = o.name;
   o.friction = t.number("friction", 0.0, Range::non_negative());
   if (const auto by_body = t.table("friction_by_body")) {
     for (const auto& body : by_body->keys()) o.friction_by_body[body] = by_body->number(body, Range::non_negative());
     by_body->finish();
   }
-  t.finish();
+  // Keys per type (TableReader::finish() would not know `points`, read from the raw node).
+  for (const auto& key : t.keys()) {
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    std::string allowed;
+    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
+    t.fail(key, "unknown key for type = \"" + type + "\"; allowed here: " + allowed);
+  }
+  if (const std::string e = obstacle_error(o.shape); !e.empty()) t.fail("type", e);
   return o;
 }
 
@@ -195,7 +256,8 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
 
   const auto obstacles = root.tables("obstacles");
   for (std::size_t i = 0; i < obstacles.size(); ++i) {
-    c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i)));
+    const toml::node* raw_points = doc["obstacles"][i]["points"].node();
+    c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i), raw_points));
     for (const auto& [body, mu] : c.obstacles.back().friction_by_body) {
       bool known = false;
       for (const auto& b : c.bodies) known = known || b.name == body;

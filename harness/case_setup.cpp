@@ -28,6 +28,9 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
 
 Material make_material(const MaterialSpec& m, PlaneMode plane) {
   if (m.model == "neo_hookean") return NeoHookean::make(m.young, m.poisson, m.density, plane);
+  if (m.model == "blatz_ko") return BlatzKo::make(m.shear_modulus, m.density, plane);
+  if (m.model == "mooney_rivlin")
+    return MooneyRivlin::make(m.c10, m.c01, m.bulk_modulus, m.density, plane);
   return StVenantKirchhoff::make(m.young, m.poisson, m.density, plane);
 }
 
@@ -118,7 +121,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     }
   }
 
-  for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back({o.name, o.point, o.normal});
+  for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back(o.shape);
   s.friction.assign(c.bodies.size(), std::vector<double>(c.obstacles.size(), 0.0));
   for (std::size_t b = 0; b < c.bodies.size(); ++b)
     for (std::size_t o = 0; o < c.obstacles.size(); ++o) {

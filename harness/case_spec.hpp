@@ -30,9 +30,11 @@ struct MeshSpec {
 };
 
 struct MaterialSpec {
-  std::string model = "saint_venant_kirchhoff";  // or "neo_hookean"
-  double young = 0.0;    // [Pa]
-  double poisson = 0.0;  // [-]
+  std::string model = "saint_venant_kirchhoff";  // or "neo_hookean", "blatz_ko", "mooney_rivlin"
+  double young = 0.0;    // [Pa] (saint_venant_kirchhoff, neo_hookean)
+  double poisson = 0.0;  // [-]  (saint_venant_kirchhoff, neo_hookean)
+  double shear_modulus = 0.0;  // [Pa] (blatz_ko)
+  double c10 = 0.0, c01 = 0.0, bulk_modulus = 0.0;  // [Pa] (mooney_rivlin)
   double density = 0.0;  // [kg/m^3]
 };
 
@@ -74,6 +76,7 @@ struct ObstacleSpec {
   std::string name;
   Vec2 point = Vec2::Zero();    // [m]
   Vec2 normal = Vec2::UnitY();  // normalized on read
+  Obstacle shape;               // the checked geometry of any type (line: same point, normal)
   double friction = 0.0;        // mu for every body [-]
   std::map<std::string, double> friction_by_body;  // per-body mu [-]
   std::string where;

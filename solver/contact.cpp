@@ -2,10 +2,140 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace ricochet {
 
-ContactState make_contact_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+Obstacle make_line_obstacle(std::string name, const Vec2& point, const Vec2& normal) {
+  Obstacle ob;
+  ob.name = std::move(name);
+  ob.kind = ObstacleKind::line;
+  ob.point = point;
+  ob.normal = normal.norm() > 0.0 ? Vec2(normal.normalized()) : normal;
+  if (const std::string e = obstacle_error(ob); !e.empty()) throw std::invalid_argument(e);
+  return ob;
+}
+
+Obstacle make_circle_obstacle(std::string name, const Vec2& center, double radius, bool inside) {
+  Obstacle ob;
+  ob.name = std::move(name);
+  ob.kind = ObstacleKind::circle;
+  ob.center = center;
+  ob.radius = radius;
+  ob.inside = inside;
+  if (const std::string e = obstacle_error(ob); !e.empty()) throw std::invalid_argument(e);
+  return ob;
+}
+
+Obstacle make_polyline_obstacle(std::string name, std::vector<Vec2, Eigen::aligned_allocator<Vec2>> points,
+                                bool left) {
+  Obstacle ob;
+  ob.name = std::move(name);
+  ob.kind = ObstacleKind::polyline;
+  ob.points = std::move(points);
+  ob.left = left;
+  if (const std::string e = obstacle_error(ob); !e.empty()) throw std::invalid_argument(e);
+  return ob;
+}
+
+std::string obstacle_error(const Obstacle& ob) {
+  const std::string who = "obstacle \"" + ob.name + "\": ";
+  switch (ob.kind) {
+    case ObstacleKind::line:
+      if (!ob.point.allFinite()) return who + "point must be finite";
+      if (!ob.normal.allFinite() || !(std::abs(ob.normal.norm() - 1.0) <= 1e-12))
+        return who + "normal must be a finite unit vector";
+      return {};
+    case ObstacleKind::circle:
+      if (!ob.center.allFinite()) return who + "center must be finite";
+      if (!(ob.radius > 0.0) || !std::isfinite(ob.radius)) return who + "radius must be finite and > 0";
+      return {};
+    case ObstacleKind::polyline:
+      if (ob.points.size() < 2) return who + "a polyline needs at least 2 points";
+      for (std::size_t j = 0; j < ob.points.size(); ++j) {
+        if (!ob.points[j].allFinite()) return who + "point " + std::to_string(j) + " is not finite";
+        if (j > 0 && !((ob.points[j] - ob.points[j - 1]).norm() > 0.0))
+          return who + "segment " + std::to_string(j - 1) + " (points " + std::to_string(j - 1) + " and " +
+                 std::to_string(j) + ") has zero length";
+      }
+      return {};
+  }
+  return who + "unknown kind";
+}
+
+ObstacleContact closest_circle(const Obstacle& ob, const Vec2& x) {
+  const Vec2 r = x - ob.center;
+  const double d = r.norm();
+  const double sign = ob.inside ? -1.0 : 1.0;
+  const Vec2 radial = d > 0.0 ? Vec2(r / d) : Vec2(Vec2::UnitY());
+  return {sign * (d - ob.radius), sign * radial};
+}
+
+ObstacleContact closest_polyline(const Obstacle& ob, const Vec2& x) {
+  const auto& p = ob.points;
+  const int segments = static_cast<int>(p.size()) - 1;
+  const double side = ob.left ? 1.0 : -1.0;
+  auto seg_normal = [&](int j) -> Vec2 {
+    const Vec2 e = (p[j + 1] - p[j]).normalized();
+    return side * Vec2(-e.y(), e.x());  // left: direction rotated by +90 degrees
+  };
+  // Nearest feature: per segment, the projection parameter clamped to [0, 1] (not clamped at
+  // the free ends of the end segments, which extend as rays).
+  double best = std::numeric_limits<double>::infinity();
+  double scale = 0.0;
+  for (int j = 0; j < segments; ++j) scale = std::max(scale, (p[j + 1] - p[j]).norm());
+  // First pass: nearest distance.
+  auto feature = [&](int j, int& vertex) -> double {
+    const Vec2 e = p[j + 1] - p[j];
+    const double s = (x - p[j]).dot(e) / e.squaredNorm();
+    vertex = -1;
+    if (s <= 0.0 && j > 0) vertex = j;
+    else if (s >= 1.0 && j < segments - 1) vertex = j + 1;
+    if (vertex >= 0) return (x - p[vertex]).norm();
+    return std::abs(seg_normal(j).dot(x - p[j]));
+  };
+  int first = -1, first_vertex = -1;
+  for (int j = 0; j < segments; ++j) {
+    int v;
+    const double d = feature(j, v);
+    if (d < best) {
+      best = d;
+      first = j;
+      first_vertex = v;
+    }
+  }
+  // Signed gap and normal of one feature.
+  auto signed_feature = [&](int j, int vertex) -> ObstacleContact {
+    if (vertex < 0) {
+      const Vec2 n = seg_normal(j);
+      return {n.dot(x - p[j]), n};
+    }
+    const Vec2 r = x - p[vertex];
+    const Vec2 b = (seg_normal(vertex - 1) + seg_normal(vertex)).normalized();
+    const double d = r.norm();
+    if (!(d > 0.0)) return {0.0, b};
+    const double sgn = r.dot(b) >= 0.0 ? 1.0 : -1.0;
+    return {sgn * d, sgn * r / d};
+  };
+  ObstacleContact out = signed_feature(first, first_vertex);
+  // Ties: the other features within 1e-12 of the length scale add their normals.
+  const double tie = 1e-12 * std::max(scale, best);
+  Vec2 sum = out.normal;
+  int tied = 0;
+  for (int j = first + 1; j < segments; ++j) {
+    int v;
+    const double d = feature(j, v);
+    if (!(d - best <= tie)) continue;
+    if (v >= 0 && v == first_vertex) continue;  // the same vertex seen from its other segment
+    sum += signed_feature(j, v).normal;
+    ++tied;
+  }
+  if (tied > 0 && sum.norm() > 1e-12) out.normal = sum.normalized();
+  return out;
+}
+
+ContactState make_contact_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed) {
   ContactState c;
@@ -23,6 +153,9 @@ ContactState make_contact_state(const Model& model, const std::vector<LineObstac
   c.x_free.assign(n, {});
   c.status.assign(n, ContactStatus::open);
   c.weight.assign(n, 0.0);
+  c.normal.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    c.normal[k] = closest(obstacles[c.candidates[k].obstacle], model.ref.col(c.candidates[k].node)).normal;
   c.active.reserve(n);
   c.node_reaction.assign(model.num_nodes(), Vec2::Zero());
   return c;
@@ -33,13 +166,12 @@ namespace {
 // Gauss-Seidel sweeps over the active contacts; each contact sees the current reactions of
 // the other contacts on its node through x = x_free + w (r_own + r_others). Returns sweeps.
 template <bool kFriction>
-int gauss_seidel(const std::vector<LineObstacle>& obstacles, const ContactSettings& set,
-                 ContactState& c) {
+int gauss_seidel(const ContactSettings& set, ContactState& c) {
   for (int sweep = 1; sweep <= set.max_sweeps; ++sweep) {
     bool converged = true;
     for (int k : c.active) {
       const ContactCandidate& cc = c.candidates[k];
-      const Vec2 n = obstacles[cc.obstacle].normal, t = obstacles[cc.obstacle].tangent();
+      const Vec2 n = c.normal[k], t{n.y(), -n.x()};
       const double w = c.weight[k];
       LocalPair& r = c.reaction[k];
       const Vec2 own = r.n * n + r.t * t;
@@ -68,7 +200,7 @@ int gauss_seidel(const std::vector<LineObstacle>& obstacles, const ContactSettin
 
 }  // namespace
 
-void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& set, ContactState& c, State& s) {
   const double dt = s.dt;
   const bool position = set.level == ContactLevel::position;
@@ -76,19 +208,22 @@ void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacle
   // Broad phase: only boundary nodes whose free motion ends behind an obstacle at t+dt.
   for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
     const ContactCandidate& cc = c.candidates[k];
-    const LineObstacle& ob = obstacles[cc.obstacle];
     const int i = cc.node;
     const Vec2 v_free = s.v_half.segment<2>(2 * i) + dt * s.a.segment<2>(2 * i);
     const Vec2 x_next = model.ref.col(i) + s.u.segment<2>(2 * i) + dt * v_free;
-    const double gap = ob.normal.dot(x_next - ob.point);
+    // Gap and frame at the predicted position, frozen for the step.
+    const ObstacleContact oc = closest(obstacles[cc.obstacle], x_next);
+    const double gap = oc.gap;
     if (!(gap < 0.0)) {
       c.reaction[k] = {};
       c.status[k] = ContactStatus::open;
       continue;
     }
     const double m = model.mass[2 * i];
-    c.x_free[k] = position ? LocalPair{gap, dt * ob.tangent().dot(v_free)}
-                           : LocalPair{ob.normal.dot(v_free), ob.tangent().dot(v_free)};
+    c.normal[k] = oc.normal;
+    const Vec2 t = oc.tangent();
+    c.x_free[k] = position ? LocalPair{gap, dt * t.dot(v_free)}
+                           : LocalPair{oc.normal.dot(v_free), t.dot(v_free)};
     c.weight[k] = position ? dt * dt / m : dt / m;
     c.node_reaction[i].setZero();
     c.active.push_back(k);
@@ -102,10 +237,10 @@ void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacle
 
   // Warm start from the last step's reactions.
   for (int k : c.active) {
-    const LineObstacle& ob = obstacles[c.candidates[k].obstacle];
-    c.node_reaction[c.candidates[k].node] += c.reaction[k].n * ob.normal + c.reaction[k].t * ob.tangent();
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+    c.node_reaction[c.candidates[k].node] += c.reaction[k].n * n + c.reaction[k].t * t;
   }
-  c.sweeps = c.any_friction ? gauss_seidel<true>(obstacles, set, c) : gauss_seidel<false>(obstacles, set, c);
+  c.sweeps = c.any_friction ? gauss_seidel<true>(set, c) : gauss_seidel<false>(set, c);
   ++c.steps_with_contact;
   c.sweeps_total += c.sweeps;
   c.sweeps_max = std::max(c.sweeps_max, c.sweeps);
@@ -114,9 +249,9 @@ void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacle
   // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
   for (int k : c.active) {
     const ContactCandidate& cc = c.candidates[k];
-    const LineObstacle& ob = obstacles[cc.obstacle];
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
     const LocalPair r = c.reaction[k];
-    const Vec2 force = r.n * ob.normal + r.t * ob.tangent();
+    const Vec2 force = r.n * n + r.t * t;
     s.a.segment<2>(2 * cc.node) += force / model.mass[2 * cc.node];
     c.normal_force += r.n;
     c.tangential_force += r.t;
@@ -130,23 +265,22 @@ void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacle
   // 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2 that R causes (a node stopped dead loses 1/2 m v^2).
   for (int k : c.active) {
     const ContactCandidate& cc = c.candidates[k];
-    const LineObstacle& ob = obstacles[cc.obstacle];
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
     const Vec2 a = s.a.segment<2>(2 * cc.node);
     const Vec2 v_next = s.v_half.segment<2>(2 * cc.node) + dt * a;
     const Vec2 v_mid = s.v_half.segment<2>(2 * cc.node) + 0.5 * dt * a;
     const LocalPair r = c.reaction[k];
-    c.friction_dissipation -= r.t * dt * ob.tangent().dot(v_next);
-    c.contact_work += dt * (r.n * ob.normal + r.t * ob.tangent()).dot(v_mid);
+    c.friction_dissipation -= r.t * dt * t.dot(v_next);
+    c.contact_work += dt * (r.n * n + r.t * t).dot(v_mid);
   }
 }
 
-double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
+double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
                    const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
   double depth = 0.0;
   for (const ContactCandidate& cc : candidates) {
-    const LineObstacle& ob = obstacles[cc.obstacle];
     const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
-    depth = std::max(depth, -ob.normal.dot(x - ob.point));
+    depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
   }
   return depth;
 }

@@ -13,14 +13,86 @@
 
 namespace ricochet {
 
-// A rigid straight obstacle: the half-plane behind the line through `point` with unit
-// outward normal `normal`; the gap of a point x is g = normal . (x - point), g >= 0 allowed.
-struct LineObstacle {
+// A rigid obstacle (literature: rigid foundation). One geometric query, closest(), serves
+// every scheme: the signed gap g of a point x (g >= 0 on the allowed side, g < 0 inside the
+// obstacle) and the unit outward normal n at the closest point of the obstacle's boundary,
+// pointing to the allowed side; the tangent is t = (n_y, -n_x) (n rotated by -90 degrees).
+// For every kind g = n . (x - q) with q the closest boundary point, so the first-order gap
+// about x is g(x + du) ~ g + n . du.
+//   line:     the half-plane behind the line through `point` with unit outward normal
+//             `normal`: g = normal . (x - point), n = normal (the original LineObstacle, same
+//             arithmetic);
+//   circle:   centre `center`, radius `radius` > 0. inside = false: the rigid disk is the
+//             obstacle (bodies stay outside, e.g. a peg): g = |x - c| - r, n = (x - c)/|x - c|.
+//             inside = true: everything outside the circle is the obstacle (bodies stay inside
+//             a rigid ring or bowl): g = r - |x - c|, n = -(x - c)/|x - c|. At x = c exactly the
+//             radial direction is undefined and n = +y is used.
+//   polyline: an open chain points[0..m] (m >= 1 segments, none of zero length). The allowed
+//             side is to the left (left = true) or right of the direction of travel from
+//             points[0] to points[m]; the outward normal of segment j is its direction rotated
+//             by +90 degrees (left) or -90 degrees (right). The first and last segments extend
+//             to infinity as rays, so the chain divides the plane in two like a line does (a
+//             2-point polyline is a line); the rays must not cross the chain (not checked).
+//             g is the signed distance to the nearest segment:
+//               - nearest point inside segment j (or on an end ray): g = n_j . (x - p_j), n = n_j;
+//               - nearest point an interior vertex v (x in the corner's wedge): |g| = |x - v|, the
+//                 sign that of (x - v) . b with b the bisector of the two segment normals
+//                 (positive in the wedge outside a convex corner, negative in the wedge behind
+//                 a concave one), and n = sign * (x - v)/|x - v| (n = b if x = v);
+//               - ties (x equidistant from several segments within 1e-12 of the chain's length
+//                 scale, e.g. on the bisector of a concave corner such as the bottom of a V):
+//                 g is that of the first nearest segment and n the normalized sum of the tied
+//                 normals (the bisector), so a symmetric chain stays symmetric; if the tied
+//                 normals cancel, n is the first one's.
+//             Cost O(m) per query.
+// Every scheme evaluates closest() once per candidate and step at its predicted position
+// (semi-explicit: x at t+dt of the free motion; implicit: x at the predicted u of the Newton
+// iterate; penalty: x at u_n) and freezes n (and t) for the step: the reactions act along that
+// frame and the gap is linearized about the predicted point. For a line this is exact; for a
+// circle or a polyline the linearization is first order (the boundary's curvature, or a switch
+// of the nearest segment, enters at the next step), consistent with the position-level scheme.
+enum class ObstacleKind { line, circle, polyline };
+
+struct Obstacle {
   std::string name;
-  Vec2 point = Vec2::Zero();    // [m]
-  Vec2 normal = Vec2::UnitY();  // unit [-]
-  Vec2 tangent() const { return {normal.y(), -normal.x()}; }  // t: n rotated by -90 degrees
+  Vec2 point = Vec2::Zero();    // line: a point of the line [m]
+  Vec2 normal = Vec2::UnitY();  // line: unit outward normal [-]
+  ObstacleKind kind = ObstacleKind::line;
+  Vec2 center = Vec2::Zero();   // circle: centre [m]
+  double radius = 0.0;          // circle: radius > 0 [m]
+  bool inside = false;          // circle: bodies inside the circle (ring/bowl) instead of outside
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> points{};  // polyline: >= 2 vertices [m]
+  bool left = true;             // polyline: allowed side left (true) or right of the chain
+  Vec2 tangent() const { return {normal.y(), -normal.x()}; }  // line: t = n rotated by -90 degrees
 };
+using LineObstacle = Obstacle;  // the line kind; kept for existing code
+
+// Result of closest(): signed gap [m] and unit outward normal at the closest point.
+struct ObstacleContact {
+  double gap = 0.0;
+  Vec2 normal = Vec2::UnitY();
+  Vec2 tangent() const { return {normal.y(), -normal.x()}; }
+};
+
+// Checked constructors (throw std::invalid_argument with a one-line message on bad geometry).
+Obstacle make_line_obstacle(std::string name, const Vec2& point, const Vec2& normal);  // normal normalized
+Obstacle make_circle_obstacle(std::string name, const Vec2& center, double radius, bool inside);
+Obstacle make_polyline_obstacle(std::string name, std::vector<Vec2, Eigen::aligned_allocator<Vec2>> points,
+                                bool left);
+// Empty if `ob` is valid, else what is wrong (one line).
+std::string obstacle_error(const Obstacle& ob);
+
+ObstacleContact closest_circle(const Obstacle& ob, const Vec2& x);
+ObstacleContact closest_polyline(const Obstacle& ob, const Vec2& x);
+
+inline ObstacleContact closest(const Obstacle& ob, const Vec2& x) {
+  switch (ob.kind) {
+    case ObstacleKind::circle: return closest_circle(ob, x);
+    case ObstacleKind::polyline: return closest_polyline(ob, x);
+    case ObstacleKind::line: break;
+  }
+  return {ob.normal.dot(x - ob.point), ob.normal};
+}
 
 // Which quantity x the local problem is written on (literature 2.5 and open question 6.1).
 enum class ContactLevel {
@@ -50,6 +122,9 @@ struct ContactState {
   std::vector<ContactStatus> status;     // per candidate
   std::vector<int> active;               // candidate indices active this step
   std::vector<double> weight;            // per candidate, w = local compliance
+  // Per candidate, the outward normal of closest() at the predicted position, frozen for the
+  // step: `reaction` is expressed in this frame (n, t = (n_y, -n_x)).
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> node_reaction;  // per node, sum of r in global axes [N]
   bool any_friction = false;
 
@@ -69,17 +144,17 @@ struct ContactState {
 
 // Candidates: the boundary nodes of each body paired with each obstacle, less nodes with a
 // prescribed DOF. `friction[b][o]` is mu of body b against obstacle o.
-ContactState make_contact_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+ContactState make_contact_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed);
 
 // After evaluate(): solves the contact reactions of step n -> n+1 and adds them to s.a.
-void contact_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& settings, ContactState& c, State& s);
 
 // Largest depth of any candidate node behind its obstacle at u (>= 0) [m]. Every scheme
 // measures penetration with this, on its own candidate list.
-double penetration(const Model& model, const std::vector<LineObstacle>& obstacles,
+double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
                    const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u);
 
 }  // namespace ricochet

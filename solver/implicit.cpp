@@ -135,10 +135,12 @@ bool ImplicitIntegrator::solve_contact() {
   cs.active.clear();
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
     const ContactCandidate& cc = cs.candidates[k];
-    const LineObstacle& ob = run_.obstacles[cc.obstacle];
     const int i = cc.node;
     const Vec2 u_pred = u1_.segment<2>(2 * i) + dt * th * dv_free_.segment<2>(2 * i);
-    const double gap = ob.normal.dot(model_.ref.col(i) + u_pred - ob.point);
+    // Gap and frame at the predicted position (see closest() in contact.hpp); the reactions of
+    // this iterate act along this frame.
+    const ObstacleContact oc = closest(run_.obstacles[cc.obstacle], Vec2(model_.ref.col(i) + u_pred));
+    const double gap = oc.gap;
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
     // engaged contact that separates simply gets R = 0 from the contact law.
     if (gap < 0.0) engaged_[k] = 1;
@@ -147,8 +149,10 @@ bool ImplicitIntegrator::solve_contact() {
       continue;
     }
     const Vec2 v_pred = v1_.segment<2>(2 * i) + dv_free_.segment<2>(2 * i);
-    cs.x_free[k] = position ? LocalPair{gap, ob.tangent().dot(u_pred - u0_.segment<2>(2 * i))}
-                            : LocalPair{ob.normal.dot(v_pred), ob.tangent().dot(v_pred)};
+    cs.normal[k] = oc.normal;
+    const Vec2 t = oc.tangent();
+    cs.x_free[k] = position ? LocalPair{gap, t.dot(u_pred - u0_.segment<2>(2 * i))}
+                            : LocalPair{oc.normal.dot(v_pred), t.dot(v_pred)};
     const double a_ii = 0.5 / inv_diag_[2 * i] + 0.5 / inv_diag_[2 * i + 1];
     cs.weight[k] = c * dt / a_ii;  // local compliance estimate: exact when A is diagonal
     cs.active.push_back(k);
@@ -173,8 +177,7 @@ bool ImplicitIntegrator::engage_penetrating() {
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
     if (engaged_[k]) continue;
     const ContactCandidate& cc = contact_.candidates[k];
-    const LineObstacle& ob = run_.obstacles[cc.obstacle];
-    if (ob.normal.dot(model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node) - ob.point) < 0.0) {
+    if (closest(run_.obstacles[cc.obstacle], Vec2(model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node))).gap < 0.0) {
       engaged_[k] = 1;
       any = true;
     }
@@ -185,9 +188,8 @@ bool ImplicitIntegrator::engage_penetrating() {
 void ImplicitIntegrator::build_impulse() {
   impulse_.setZero();
   for (int k : contact_.active) {
-    const LineObstacle& ob = run_.obstacles[contact_.candidates[k].obstacle];
-    impulse_.segment<2>(2 * contact_.candidates[k].node) +=
-        contact_.reaction[k].n * ob.normal + contact_.reaction[k].t * ob.tangent();
+    const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+    impulse_.segment<2>(2 * contact_.candidates[k].node) += contact_.reaction[k].n * n + contact_.reaction[k].t * t;
   }
 }
 
@@ -205,9 +207,9 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
     double change = 0.0, size = 0.0;
     for (int k : cs.active) {
       const ContactCandidate& cc = cs.candidates[k];
-      const LineObstacle& ob = run_.obstacles[cc.obstacle];
+      const Vec2 n = cs.normal[k], t{n.y(), -n.x()};
       const Vec2 yi = y_.segment<2>(2 * cc.node);
-      const LocalPair x{cs.x_free[k].n + c * ob.normal.dot(yi), cs.x_free[k].t + c * ob.tangent().dot(yi)};
+      const LocalPair x{cs.x_free[k].n + c * n.dot(yi), cs.x_free[k].t + c * t.dot(yi)};
       const double rho = omega / cs.weight[k];
       LocalPair& r = cs.reaction[k];
       const LocalPair next = project_coulomb(
@@ -238,8 +240,8 @@ bool ImplicitIntegrator::exact_contact(double c) {
   const int m = dirs * static_cast<int>(cs.active.size());
   ++exact_contact_solves_;
   auto direction = [&](int a) -> Vec2 {
-    const LineObstacle& ob = run_.obstacles[cs.candidates[cs.active[a / dirs]].obstacle];
-    return a % dirs == 0 ? ob.normal : ob.tangent();
+    const Vec2 n = cs.normal[cs.active[a / dirs]];
+    return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
   };
   for (int a = 0; a < m; ++a) {
     rhs_.setZero();
@@ -319,9 +321,9 @@ bool ImplicitIntegrator::step(bool with_energy) {
                      : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
   impulse_.setZero();
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
-    const LineObstacle& ob = run_.obstacles[contact_.candidates[k].obstacle];
-    impulse_.segment<2>(2 * contact_.candidates[k].node) +=
-        contact_.reaction[k].n * ob.normal + contact_.reaction[k].t * ob.tangent();
+    // The last step's reactions in the frame they were solved in.
+    const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+    impulse_.segment<2>(2 * contact_.candidates[k].node) += contact_.reaction[k].n * n + contact_.reaction[k].t * t;
   }
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
@@ -395,10 +397,10 @@ bool ImplicitIntegrator::step(bool with_energy) {
       continue;
     }
     const ContactCandidate& cc = cs.candidates[k];
-    const LineObstacle& ob = run_.obstacles[cc.obstacle];
+    const Vec2 n = cs.normal[k], t{n.y(), -n.x()};
     const Vec2 du = u1_.segment<2>(2 * cc.node) - u0_.segment<2>(2 * cc.node);
-    cs.contact_work += (r.n * ob.normal + r.t * ob.tangent()).dot(du);
-    cs.friction_dissipation -= r.t * ob.tangent().dot(du);
+    cs.contact_work += (r.n * n + r.t * t).dot(du);
+    cs.friction_dissipation -= r.t * t.dot(du);
     cs.status[k] = classify(r, cc.friction_coeff);
     ++cs.active_count;
     cs.stick_count += cs.status[k] == ContactStatus::stick;

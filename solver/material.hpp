@@ -175,7 +175,77 @@ struct NeoHookean {
   double wave_speed() const;
 };
 
-using Material = std::variant<StVenantKirchhoff, NeoHookean>;
+// Derivatives of a reduced in-plane energy W(n, j) with n = |F|^2 = tr(F^T F) and j = det F
+// (for plane stress, the out-of-plane unknown already eliminated, i.e. the second derivatives
+// are the Schur complements). P = 2 W_n F + W_j cof F and
+// A = 2 W_n I + W_j d2j/dF2 + 4 W_nn f f^T + 2 W_nj (f k^T + k f^T) + W_jj k k^T with
+// f = vec F, k = vec cof F (index 2i + J) and d2j/dF2 the constant +-1 matrix of det.
+struct InvariantDerivatives {
+  double wn = 0.0, wj = 0.0, wnn = 0.0, wnj = 0.0, wjj = 0.0;
+};
+void invariant_piola_and_tangent(const Mat2& F, const InvariantDerivatives& d, Mat2& P,
+                                 Eigen::Matrix4d& A);
+
+// Blatz-Ko foam rubber (the f = 0 form, Feng, Magnain & Cros 2006):
+//   W = mu/2 (I2/I3 + 2 sqrt(I3) - 5) = mu/2 (tr C^-1 + 2 J - 5)   (3D invariants of C).
+// Small-strain limit: shear modulus mu, Poisson's ratio 1/4 (lambda = mu, E = 2.5 mu).
+// Plane strain (C33 = 1): W = mu/2 (|F|^2/j^2 + 2 j - 4), j = det F.
+// Plane stress: S33 = mu (J/C33 - 1/C33^2) = 0 has the unique closed-form root C33 = j^(-2/3)
+// for every j > 0, so W = mu/2 (|F|^2/j^2 + 3 j^(2/3) - 5) exactly (no iteration).
+struct BlatzKo {
+  double shear_modulus = 0.0;  // mu [Pa]
+  double lambda = 0.0;         // small-strain 3D first Lame constant (= mu) [Pa]
+  double density = 0.0;        // [kg/m^3]
+  PlaneMode plane = PlaneMode::strain;
+
+  static BlatzKo make(double shear_modulus, double density, PlaneMode plane);
+
+  InvariantDerivatives derivatives(const Mat2& F) const;
+  double energy_density(const Mat2& F) const;
+  Mat2 first_piola(const Mat2& F) const;
+  void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const;
+  Eigen::Matrix4d tangent(const Mat2& F) const;
+  OutOfPlane out_of_plane(const Mat2& F) const;
+  double wave_speed() const;
+};
+
+// Compressible Mooney-Rivlin with isochoric invariants (3D):
+//   W = c10 (J^(-2/3) I1 - 3) + c01 (J^(-4/3) I2 - 3) + kappa/2 (J - 1)^2.
+// Small-strain limit: mu = 2 (c10 + c01), bulk modulus kappa, lambda = kappa - 2 mu / 3.
+// Plane strain: F33 = 1. Plane stress: S33 = 0 solved for t = ln F33 by a bracketed Newton
+// iteration at every evaluation. A root always exists (c10 + c01 > 0, kappa > 0); every root
+// with J >= 1/4 is a strict minimum in F33 (W'' - 2/3 W' > 0 there), so the root is unique
+// unless some root has J < 1/4 (only seen for in-plane area ratios det F < ~0.3 with large
+// kappa/c01 and strong distortion) - see docs/case-format.md.
+struct MooneyRivlin {
+  double c10 = 0.0;            // [Pa]
+  double c01 = 0.0;            // [Pa]
+  double bulk_modulus = 0.0;   // kappa [Pa]
+  double shear_modulus = 0.0;  // small-strain mu = 2 (c10 + c01) [Pa]
+  double lambda = 0.0;         // small-strain 3D first Lame constant kappa - 2 mu / 3 [Pa]
+  double density = 0.0;        // [kg/m^3]
+  PlaneMode plane = PlaneMode::strain;
+
+  static MooneyRivlin make(double c10, double c01, double bulk_modulus, double density,
+                           PlaneMode plane);
+
+  // W and its derivatives in (n, j, t) with n = |F|^2, j = det F, t = ln F33.
+  struct Terms {
+    double w, wn, wj, wt, wnj, wjj, wnt, wjt, wtt;
+  };
+  Terms terms(double n, double j, double t) const;
+  // t = ln F33: 0 in plane strain, the root of dW/dt = 0 (S33 = 0) in plane stress.
+  double log_stretch33(double n, double j) const;
+
+  double energy_density(const Mat2& F) const;
+  Mat2 first_piola(const Mat2& F) const;
+  void first_piola_and_tangent(const Mat2& F, Mat2& P, Eigen::Matrix4d& A) const;
+  Eigen::Matrix4d tangent(const Mat2& F) const;
+  OutOfPlane out_of_plane(const Mat2& F) const;
+  double wave_speed() const;
+};
+
+using Material = std::variant<StVenantKirchhoff, NeoHookean, BlatzKo, MooneyRivlin>;
 
 double material_density(const Material& m);
 double material_wave_speed(const Material& m);

@@ -81,7 +81,7 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
 
 }  // namespace
 
-PenaltyState make_penalty_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed,
                                 const PenaltySettings& settings) {
@@ -104,7 +104,8 @@ PenaltyState make_penalty_state(const Model& model, const std::vector<LineObstac
   }
   p.force_n.assign(n, 0.0);
   p.force_t.assign(n, 0.0);
-  p.last_slip.assign(n, 0.0);
+  p.last_position.assign(n, Vec2::Zero());
+  p.normal.assign(n, Vec2::UnitY());
   p.status.assign(n, ContactStatus::open);
   p.active.reserve(n);
   return p;
@@ -127,7 +128,7 @@ double penalty_stable_time_step(const Model& model, const PenaltyState& p, doubl
   return safety * penalty_combined_critical_dt(model, p);
 }
 
-void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    PenaltyState& p, State& s) {
   const int count = static_cast<int>(p.candidates.size());
   p.active.clear();
@@ -140,10 +141,12 @@ void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacle
 
   for (int k = 0; k < count; ++k) {
     const ContactCandidate& cc = p.candidates[k];
-    const LineObstacle& ob = obstacles[cc.obstacle];
     const int i = cc.node;
     const Vec2 x = model.ref.col(i) + s.u.segment<2>(2 * i);
-    const double g = ob.normal.dot(x - ob.point);
+    const ObstacleContact oc = closest(obstacles[cc.obstacle], x);
+    const double g = oc.gap;
+    const Vec2 t = oc.tangent();
+    p.normal[k] = oc.normal;
     const double stiff = p.stiffness[k];
     const double fn = g < 0.0 ? -stiff * g : 0.0;
     double ft = 0.0;
@@ -151,9 +154,10 @@ void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacle
     if (cc.friction_coeff > 0.0) {
       // Elastic predictor on the slip increment of the step, then the return map onto
       // |f_t| <= mu f_n (f_n = 0 when open, which returns the spring to zero).
-      const double slip = ob.tangent().dot(x);
-      const double ds = first ? 0.0 : slip - p.last_slip[k];
-      p.last_slip[k] = slip;
+      // For a line t . x_{n-1} is the value stored last step, bit for bit; for a curved
+      // obstacle it projects the increment on the current tangent.
+      const double ds = first ? 0.0 : t.dot(x) - t.dot(p.last_position[k]);
+      p.last_position[k] = x;
       const double old = p.force_t[k];
       const double trial = old - stiff * ds;
       const double cap = cc.friction_coeff * fn;
@@ -172,7 +176,7 @@ void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacle
 
     depth = std::max(depth, -g);
     p.active.push_back(k);
-    s.a.segment<2>(2 * i) += (fn * ob.normal + ft * ob.tangent()) * model.inv_mass[2 * i];
+    s.a.segment<2>(2 * i) += (fn * oc.normal + ft * t) * model.inv_mass[2 * i];
     p.normal_force += fn;
     p.tangential_force += ft;
     p.normal_energy += 0.5 * stiff * g * g;
@@ -192,10 +196,10 @@ void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacle
   const double dt = s.dt;
   for (int k : p.active) {
     const ContactCandidate& cc = p.candidates[k];
-    const LineObstacle& ob = obstacles[cc.obstacle];
+    const Vec2 n = p.normal[k], t{n.y(), -n.x()};
     const int i = cc.node;
     const Vec2 v_mid = s.v_half.segment<2>(2 * i) + 0.5 * dt * s.a.segment<2>(2 * i);
-    p.contact_work += dt * (p.force_n[k] * ob.normal + p.force_t[k] * ob.tangent()).dot(v_mid);
+    p.contact_work += dt * (p.force_n[k] * n + p.force_t[k] * t).dot(v_mid);
   }
 }
 

@@ -26,11 +26,13 @@
 // LS-DYNA meaning here. (The plane-stress 2D bulk modulus lambda* + mu = E / (2 (1 - nu)) would
 // be 14 % smaller at nu = 0.3 and stays bounded as nu -> 1/2, where the 3D value diverges.)
 //
-// Forces at t_n, per candidate with g = n . (X + u_n - point):
+// Forces at t_n, per candidate with (g, n) = closest(obstacle, X + u_n) (g = n . (x - point) for a
+// line; for circles and polylines n is the normal at the closest point, t = (n_y, -n_x), both
+// frozen for the step, see contact.hpp):
 //   normal:     f_n = -k g if g < 0, else 0 (pushes along n);
 //   tangential: an elastic spring of the same k on the slip, with a return map:
-//                 f* = f_t,old - k ds, ds = t . (x_n - x_{n-1}) the node's slip increment along
-//                 the obstacle's tangent over the last step,
+//                 f* = f_t,old - k ds, ds = t . x_n - t . x_{n-1} the node's slip increment along
+//                 the current tangent t over the last step,
 //                 f_t = f* if |f*| <= mu f_n (stick), else mu f_n sign(f*) (slip);
 //               an open contact (f_n = 0) returns f_t to 0. mu = 0 skips all of it.
 //   Force on the node: f_n n + f_t t, added to s.a as f / m.
@@ -59,12 +61,13 @@ struct PenaltyState {
   std::vector<double> stiffness;             // per candidate, k [N/m]
   std::vector<double> force_n;               // per candidate, f_n of the last step (>= 0) [N]
   std::vector<double> force_t;               // per candidate, tangential spring force f_t along t [N]
-  std::vector<double> last_slip;             // per candidate, t . x at the last step [m]
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> last_position;  // per candidate, x at the last step [m]
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;  // per candidate, n of closest() at u_n (this step's frame)
   std::vector<ContactStatus> status;         // per candidate, of the last step
   std::vector<int> active;                   // candidate indices active in the last step
   double scale_factor = 0.1;                 // f_si used for `stiffness` [-]
   bool any_friction = false;
-  bool initialized = false;                  // last_slip holds the previous step's positions
+  bool initialized = false;                  // last_position holds the previous step's positions
 
   // Results of the last step (at t_n).
   int active_count = 0, stick_count = 0, slip_count = 0;
@@ -87,7 +90,7 @@ double penalty_bulk_modulus(const Material& material);
 // Candidates as make_contact_state() builds them (each body's boundary nodes with each
 // obstacle, less nodes with a prescribed DOF; friction[b][o] = mu of body b against obstacle
 // o), with their stiffness k_i from `settings`, and every working array allocated.
-PenaltyState make_penalty_state(const Model& model, const std::vector<LineObstacle>& obstacles,
+PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed,
                                 const PenaltySettings& settings);
@@ -113,7 +116,7 @@ double penalty_stable_time_step(const Model& model, const PenaltyState& p, doubl
 
 // After evaluate(): the penalty forces of the state at t_n, added to s.a; per-step results and
 // energies updated. Allocates nothing.
-void penalty_phase(const Model& model, const std::vector<LineObstacle>& obstacles,
+void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    PenaltyState& p, State& s);
 
 

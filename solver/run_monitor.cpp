@@ -104,10 +104,13 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
     diverge(s, "non-finite state");
     return false;
   }
-  if (reference_energy_ > 0.0 && total > settings_.energy_growth_limit * reference_energy_) {
+  // Growth is judged against the energy put in, E_0 + |W_ext| (a body released under gravity
+  // legitimately reaches E_0 + W_ext, which can be twice max(E_0, |W_ext|)).
+  input_energy_ = std::max(input_energy_, result_.initial_energy + std::abs(e.external_work));
+  if (input_energy_ > 0.0 && total > settings_.energy_growth_limit * input_energy_) {
     diverge(s, "energy growth: total energy " + std::to_string(total) + " J exceeds " +
-                   std::to_string(settings_.energy_growth_limit) + " x reference " +
-                   std::to_string(reference_energy_) + " J");
+                   std::to_string(settings_.energy_growth_limit) + " x the energy put in " +
+                   std::to_string(input_energy_) + " J");
     return false;
   }
   // The balance counts the stored contact (penalty) energy with the bodies' energies.

@@ -52,7 +52,8 @@ class RunMonitor {
   std::size_t next_sample_ = 0, next_field_ = 0;
   long monitor_every_ = 1;
   Eigen::VectorXd u0_;
-  double reference_energy_ = 0.0;
+  double reference_energy_ = 0.0;  // max(E_0, |W_ext|): the energy-error denominator
+  double input_energy_ = 0.0;      // max over time of E_0 + |W_ext|: the growth reference
   std::vector<double> cell_vm_;
   std::chrono::steady_clock::time_point wall0_;
   std::clock_t cpu0_;
