@@ -76,7 +76,7 @@ Json build_info() {
   return build;
 }
 
-Json run_summary(const PreparedCase& pc, const RunResult& r) {
+Json case_identity(const PreparedCase& pc) {
   const CaseSpec& c = pc.spec;
   Json j = Json::object();
   j["ricochet_version"] = RICOCHET_VERSION;
@@ -93,6 +93,12 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   }
   j["mesh"] = mesh;
   j["element"] = element;
+  return j;
+}
+
+Json run_summary(const PreparedCase& pc, const RunResult& r) {
+  const CaseSpec& c = pc.spec;
+  Json j = case_identity(pc);
   j["plane"] = plane_name(c.plane);
   // The friction coefficient of the first body-obstacle pair (null without obstacles).
   if (pc.settings.friction.empty() || pc.settings.friction.front().empty())

@@ -225,17 +225,7 @@ StabilityResult find_stable_dt(const PreparedCase& pc, const StabilityOptions& o
 }
 
 Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const StabilityResult& r) {
-  const CaseSpec& c = pc.spec;
-  Json j = Json::object();
-  j["ricochet_version"] = RICOCHET_VERSION;
-  j["case"] = c.name;
-  j["case_file"] = c.file;
-  Json overrides = Json::array();
-  for (const auto& o : c.overrides) overrides.push_back(o);
-  j["overrides"] = overrides;
-  j["scheme"] = c.scheme;
-  j["mesh"] = joined(c, false);
-  j["element"] = joined(c, true);
+  Json j = case_identity(pc);
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
   j["critical_dt"] = r.critical_dt;
