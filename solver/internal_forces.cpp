@@ -7,9 +7,13 @@
 namespace ricochet {
 namespace {
 
+// Each kernel instantiation (element x material x options) is its own function, so the
+// material law inlines into its loop: instantiated inline into all_blocks, four materials
+// exhausted GCC's inlining budget and the kernels ran 3x slower.
+
 // Elements whose cells share one deformation gradient per integration point: T3 and Q4 2x2.
 template <bool kEnergy, class Mat>
-void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
+[[gnu::noinline]] void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
   double energy = 0.0, min_j = t.min_jacobian;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const T3Geom& g = b.geom[e];
@@ -25,7 +29,7 @@ void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, For
 }
 
 template <bool kEnergy, class Mat>
-void q4_full_forces(const Q4FullBlock& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
+[[gnu::noinline]] void q4_full_forces(const Q4FullBlock& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
   double energy = 0.0, min_j = t.min_jacobian;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const Q4FullGeom& g = b.geom[e];
@@ -45,7 +49,7 @@ void q4_full_forces(const Q4FullBlock& b, const Mat& mat, const double* u, doubl
 
 // One-point Q4 with Flanagan-Belytschko hourglass forces f_I = gamma_I Q, Q = c q.
 template <bool kEnergy, bool kViscous, class Mat>
-void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& mat, const double* u,
+[[gnu::noinline]] void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& mat, const double* u,
                          const double* v, double* f, ForceTotals& t) {
   double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {

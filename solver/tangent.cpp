@@ -67,8 +67,10 @@ struct Context {
   double* f;
 };
 
+// Each kernel instantiation is its own function so the material law inlines into its loop
+// (see internal_forces.cpp).
 template <bool kEnergy, class Mat>
-void t3_system(const T3Block& b, const Mat& mat, const Context& x, const int* slots,
+[[gnu::noinline]] void t3_system(const T3Block& b, const Mat& mat, const Context& x, const int* slots,
                ForceTotals& t) {
   double energy = 0.0, min_j = t.min_jacobian;
   ElementMatrix<3> k;
@@ -91,7 +93,7 @@ void t3_system(const T3Block& b, const Mat& mat, const Context& x, const int* sl
 }
 
 template <bool kEnergy, class Mat>
-void q4_full_system(const Q4FullBlock& b, const Mat& mat, const Context& x, const int* slots,
+[[gnu::noinline]] void q4_full_system(const Q4FullBlock& b, const Mat& mat, const Context& x, const int* slots,
                     ForceTotals& t) {
   double energy = 0.0, min_j = t.min_jacobian;
   ElementMatrix<4> k;
@@ -118,7 +120,7 @@ void q4_full_system(const Q4FullBlock& b, const Mat& mat, const Context& x, cons
 }
 
 template <bool kEnergy, bool kViscous, class Mat>
-void q4_hourglass_system(const Q4HourglassBlock& b, const Mat& mat, const Context& x,
+[[gnu::noinline]] void q4_hourglass_system(const Q4HourglassBlock& b, const Mat& mat, const Context& x,
                          const int* slots, ForceTotals& t) {
   double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
   ElementMatrix<4> k;
