@@ -76,6 +76,12 @@ Json build_info() {
   return build;
 }
 
+std::string joined_bodies(const CaseSpec& c, bool element) {
+  std::string s;
+  for (const auto& b : c.bodies) s += (s.empty() ? "" : "+") + (element ? b.element : b.mesh);
+  return s;
+}
+
 Json case_identity(const PreparedCase& pc) {
   const CaseSpec& c = pc.spec;
   Json j = Json::object();
@@ -86,13 +92,8 @@ Json case_identity(const PreparedCase& pc) {
   for (const auto& o : c.overrides) overrides.push_back(o);
   j["overrides"] = overrides;
   j["scheme"] = c.scheme;
-  std::string mesh, element;
-  for (const auto& b : c.bodies) {
-    mesh += (mesh.empty() ? "" : "+") + b.mesh;
-    element += (element.empty() ? "" : "+") + b.element;
-  }
-  j["mesh"] = mesh;
-  j["element"] = element;
+  j["mesh"] = joined_bodies(c, false);
+  j["element"] = joined_bodies(c, true);
   return j;
 }
 

@@ -14,6 +14,8 @@ namespace ricochet {
 // What every written result starts with: program version, case, case file, overrides,
 // scheme, mesh(es) and element formulation(s) (bodies joined by "+").
 Json case_identity(const PreparedCase& pc);
+// The bodies' mesh names (or element formulations) joined by "+": "M1" for one body.
+std::string joined_bodies(const CaseSpec& c, bool element);
 Json run_summary(const PreparedCase& pc, const RunResult& r);
 
 // {compiler, build_type} of this program, and the current UTC time (ISO 8601): what every

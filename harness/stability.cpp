@@ -46,13 +46,6 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-// "M1" for one body; bodies joined with "+" otherwise (as summary.json does).
-std::string joined(const CaseSpec& c, bool element) {
-  std::string s;
-  for (const auto& b : c.bodies) s += (s.empty() ? "" : "+") + (element ? b.element : b.mesh);
-  return s;
-}
-
 bool uses_penalty_estimate(const PreparedCase& pc) {
   return pc.spec.scheme == "explicit_penalty" && std::isfinite(pc.penalty_critical_dt) &&
          pc.penalty_critical_dt > 0.0;
@@ -283,8 +276,8 @@ Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const
 }
 
 std::string stability_summary_line(const PreparedCase& pc, const StabilityResult& r) {
-  std::string s = pc.spec.name + ": " + pc.spec.scheme + " " + joined(pc.spec, false) + " " +
-                  joined(pc.spec, true) + "  estimate " + fmt("%.4g", r.estimate) + " s";
+  std::string s = pc.spec.name + ": " + pc.spec.scheme + " " + joined_bodies(pc.spec, false) + " " +
+                  joined_bodies(pc.spec, true) + "  estimate " + fmt("%.4g", r.estimate) + " s";
   auto ratio = [&](double dt) { return fmt("%.4g", dt) + " s (" + fmt("%.4g", dt / r.estimate) + " x)"; };
   switch (r.outcome) {
     case StabilityOutcome::bracketed:

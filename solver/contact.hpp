@@ -20,8 +20,8 @@ namespace ricochet {
 // For every kind g = n . (x - q) with q the closest boundary point, so the first-order gap
 // about x is g(x + du) ~ g + n . du.
 //   line:     the half-plane behind the line through `point` with unit outward normal
-//             `normal`: g = normal . (x - point), n = normal (the original LineObstacle, same
-//             arithmetic);
+//             `normal`: g = normal . (x - point), n = normal (the same arithmetic as
+//             before circles and polylines existed);
 //   circle:   centre `center`, radius `radius` > 0. inside = false: the rigid disk is the
 //             obstacle (bodies stay outside, e.g. a peg): g = |x - c| - r, n = (x - c)/|x - c|.
 //             inside = true: everything outside the circle is the obstacle (bodies stay inside
@@ -65,7 +65,6 @@ struct Obstacle {
   bool left = true;             // polyline: allowed side left (true) or right of the chain
   Vec2 tangent() const { return {normal.y(), -normal.x()}; }  // line: t = n rotated by -90 degrees
 };
-using LineObstacle = Obstacle;  // the line kind; kept for existing code
 
 // Result of closest(): signed gap [m] and unit outward normal at the closest point.
 struct ObstacleContact {

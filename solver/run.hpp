@@ -31,7 +31,7 @@ struct RunSettings {
   // The explicit loop treats obstacles by the bi-potential method (the semi-explicit scheme)
   // or by penalty springs (the explicit penalty scheme).
   enum class ContactMethod { bipotential, penalty };
-  std::vector<LineObstacle> obstacles;
+  std::vector<Obstacle> obstacles;
   std::vector<std::vector<double>> friction;
   ContactMethod contact_method = ContactMethod::bipotential;
   ContactSettings contact;

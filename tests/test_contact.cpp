@@ -310,7 +310,7 @@ struct StepRecord {
 
 struct Impact {
   Model model;
-  std::vector<LineObstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  std::vector<Obstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   ContactSettings settings;
   double mu = 0.0;
   double dt = 0.0;
@@ -599,7 +599,7 @@ TEST(ContactImpact, FrictionlessPairNeverPullsWhenAnotherPairHasFriction) {
       Model model = single_body_model(mesh, StVenantKirchhoff::make(1e9, 0.0, 1000.0, PlaneMode::stress),
                                       PlaneMode::stress, ElementKind::q4_full, 0.01);
       for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i + 1] = -1.0;
-      const std::vector<LineObstacle> obstacles = {{"ground", Vec2::Zero(), Vec2::UnitY()},
+      const std::vector<Obstacle> obstacles = {{"ground", Vec2::Zero(), Vec2::UnitY()},
                                                    {"step", Vec2(0.0, step), Vec2::UnitY()},
                                                    {"far_wall", Vec2(10.0, 0.0), -Vec2::UnitX()}};
       const double dt = 0.3 * model.critical_dt;

@@ -35,8 +35,8 @@ TEST(Obstacles, LineIsTheOriginalFormula) {
   EXPECT_EQ(c.gap, Vec2::UnitY().dot(x - Vec2(1.0, 2.0)));
   EXPECT_EQ(c.normal, Vec2::UnitY());
   expect_near_vec(c.tangent(), Vec2(1.0, 0.0));
-  // Aggregate form of the former LineObstacle still works.
-  const LineObstacle old{"ground", Vec2::Zero(), Vec2::UnitY()};
+  // Aggregate form of the former Obstacle still works.
+  const Obstacle old{"ground", Vec2::Zero(), Vec2::UnitY()};
   EXPECT_EQ(closest(old, Vec2(0.0, -0.25)).gap, -0.25);
 }
 

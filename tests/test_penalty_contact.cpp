@@ -60,7 +60,7 @@ TEST(PenaltyStiffness, RectangularCellsByHand) {
   const Mesh mesh = grid_mesh(0.04, 0.01, 2, 1, 0.0, false);
   for (ElementKind kind : {ElementKind::q4_full, ElementKind::q4_viscous}) {
     const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, kind, kThick);
-    const std::vector<LineObstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+    const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
     const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
     ASSERT_EQ(p.candidates.size(), 6u) << "all six nodes are boundary nodes";
     const double fke = f * kBulk * kThick;
@@ -94,7 +94,7 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   tri.nodes << 0.0, a, 0.0, 0.0, 0.0, b;
   tri.tris.push_back({0, 1, 2});
   const Model model = single_body_model(tri, stiff_material(), PlaneMode::stress, ElementKind::t3, kThick);
-  const std::vector<LineObstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
   ASSERT_EQ(p.candidates.size(), 3u);
   const double scale = f * kBulk * kThick / (2.0 * (0.5 * a * b)), c2 = a * a + b * b;
@@ -106,7 +106,7 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   // candidates; two obstacles double the candidates.
   const Mesh grid = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
   const Model gm = single_body_model(grid, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
-  const std::vector<LineObstacle> two{{"ground", Vec2::Zero(), Vec2::UnitY()},
+  const std::vector<Obstacle> two{{"ground", Vec2::Zero(), Vec2::UnitY()},
                                       {"wall", Vec2::Zero(), Vec2::UnitX()}};
   const std::vector<PrescribedDof> held{{2 * 24 + 1, PrescribedDof::Kind::velocity, 0.0, 0.0}};
   for (double fsi : {0.1, 10.0}) {
@@ -152,7 +152,7 @@ struct RunOutput {
 
 struct PenaltyImpact {
   Model model;
-  std::vector<LineObstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  std::vector<Obstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   double mu = 0.0;
   double f_si = 0.1;
   double dt = 0.0;
@@ -355,7 +355,7 @@ double resting_energy_growth(double f_si, double dt) {
   Mesh mesh = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
   const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress,
                                         ElementKind::q4_full, kThick, 0.1, Vec2(0.0, -1000.0));
-  const std::vector<LineObstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f_si});
   State s = initial_state(model, {}, dt);
   const Eigen::VectorXd u0 = s.u;
@@ -387,7 +387,7 @@ TEST(PenaltyTimeStep, MinimumOfTheTwoLimitsIsNoBoundTheCombinedStepIs) {
   const double f = 3.0;
   Mesh mesh = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
   const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
-  const std::vector<LineObstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
   const double dt_min = std::min(model.critical_dt, penalty_critical_dt(model, p));
   const double grow_min90 = resting_energy_growth(f, 0.9 * dt_min);
@@ -543,7 +543,7 @@ TEST(PenaltyFriction, SlowBlockSticksAndStaysInsideTheCone) {
   Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full,
                                   kThick, 0.1, Vec2(0.0, -g));
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i] = v0;
-  const std::vector<LineObstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   PenaltyState p = make_penalty_state(model, ground, {{mu}}, {}, {0.1});
   const double mass = 0.5 * model.mass.sum();
   double sum_k = 0.0;
