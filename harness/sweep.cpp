@@ -114,10 +114,10 @@ void flatten_into(const JsonValue& v, const std::string& name, std::vector<FlatF
 
 // ---- the run's request (overrides.json): what a finished run must match to be reused ----
 
-std::string request_text(const SweepSpec& spec, const SweepRun& run, int repeat, const std::string& base_hash) {
+std::string request_text(const SweepRun& run, int repeat, const std::string& base_hash) {
   Json j = Json::object();
   j["run_id"] = run.id;
-  j["base"] = spec.base.string();
+  j["base"] = run.base.string();
   j["base_fnv1a"] = base_hash;
   Json o = Json::array();
   for (const auto& a : run.set_args()) o.push_back(a);
@@ -179,8 +179,8 @@ struct Exit {
   int code = 0;  // exit status or signal number
 };
 
-pid_t spawn_run(const fs::path& exe, const SweepSpec& spec, const SweepRun& run, const fs::path& out) {
-  std::vector<std::string> args = {exe.string(), "run", spec.base.string()};
+pid_t spawn_run(const fs::path& exe, const SweepRun& run, const fs::path& out) {
+  std::vector<std::string> args = {exe.string(), "run", run.base.string()};
   for (const auto& a : run.set_args()) {
     args.push_back("--set");
     args.push_back(a);
@@ -291,7 +291,10 @@ class Sweep {
     for (std::size_t i = 0; i < runs_.size(); ++i) index_[runs_[i].id] = i;
     log_ = opt_.log ? opt_.log : &std::cerr;
     exe_ = opt_.executable.empty() ? fs::read_symlink("/proc/self/exe") : opt_.executable;
-    base_hash_ = fnv1a(read_text(spec_.base));
+    // Each run's request holds the hash of its own base, so that editing one base case reruns
+    // only the runs made from it.
+    for (const SweepRun& r : runs_)
+      if (!base_hash_.count(r.base)) base_hash_[r.base] = fnv1a(read_text(r.base));
     layout_ = make_layout();
   }
 
@@ -369,7 +372,9 @@ class Sweep {
   };
 
   fs::path folder(std::size_t i) const { return opt_.out_dir / runs_[i].folder(); }
-  std::string request(std::size_t i) const { return request_text(spec_, runs_[i], opt_.repeat, base_hash_); }
+  std::string request(std::size_t i) const {
+    return request_text(runs_[i], opt_.repeat, base_hash_.at(runs_[i].base));
+  }
 
   void lock() {
     const fs::path p = opt_.out_dir / "sweep.lock";
@@ -389,7 +394,7 @@ class Sweep {
     const fs::path dir = repeat_dir(folder(t.run), opt_.repeat, t.k);
     fs::create_directories(dir);
     t.started = Clock::now();
-    t.pid = spawn_run(exe_, spec_, runs_[t.run], dir);
+    t.pid = spawn_run(exe_, runs_[t.run], dir);
   }
 
   void begin(std::size_t i, std::vector<Task>& active) {
@@ -634,7 +639,7 @@ class Sweep {
     j["sweep"] = spec_.name;
     j["description"] = spec_.description;
     j["sweep_file"] = spec_.file;
-    j["base"] = spec_.base.string();
+    j["base"] = spec_.base.empty() ? Json() : Json(spec_.base.string());  // null: every group has its own
     j["out"] = opt_.out_dir.string();
     j["program"] = exe_.string();
     j["jobs"] = opt_.jobs;
@@ -660,6 +665,7 @@ class Sweep {
       e["id"] = r.id;
       e["group"] = r.group;
       e["kind"] = r.is_reference ? "reference" : "run";
+      e["base"] = r.base.string();
       e["folder"] = r.folder().string();
       Json o = Json::array();
       for (const auto& a : r.set_args()) o.push_back(a);
@@ -682,7 +688,7 @@ class Sweep {
   std::map<std::size_t, HistoryTable> histories_;  // reference histories, by run index
   std::ostream* log_ = nullptr;
   fs::path exe_;
-  std::string base_hash_;
+  std::map<fs::path, std::string> base_hash_;  // FNV-1a of each base case's text
   SummaryLayout layout_;
   SweepOutcome out_;
   std::size_t done_ = 0, session_runs_ = 0;
@@ -902,7 +908,7 @@ void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs) {
   for (const SweepRun& r : runs) {
     CaseSpec c;
     try {
-      c = read_case(spec.base.string(), r.set_args());
+      c = read_case(r.base.string(), r.set_args());
     } catch (const InputError& e) {
       // Point at the sweep-file value that the case rejects, when the message names it.
       const std::string msg = e.what();

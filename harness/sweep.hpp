@@ -46,8 +46,8 @@ struct SweepOutcome {
   std::size_t ok = 0, diverged = 0, failed = 0;  // over all runs
 };
 
-// Validates every run's case (read_case with the run's overrides) and each reference group's
-// error probe. Throws InputError "SWEEP: run ID: <the case's one-line error>".
+// Validates every run's case (read_case of the run's base with its overrides) and each
+// reference group's error probe. Throws InputError "SWEEP: run ID: <the case's one-line error>".
 void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs);
 
 // Runs a sweep: check_runs first (nothing is written on bad input), then the runs, writing

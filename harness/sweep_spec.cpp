@@ -178,6 +178,17 @@ std::vector<SweepAxis> read_cross(const std::string& file, const TableReader& pa
   return out;
 }
 
+// The optional `base` of a table (the sweep's or a group's): a case file, resolved against the
+// sweep file's folder so that a sweep runs the same from any working directory; empty if absent.
+fs::path read_base(const std::string& file, const TableReader& r) {
+  if (!r.has("base")) return {};
+  fs::path p = r.text("base");
+  if (p.is_relative()) p = fs::path(file).parent_path() / p;
+  p = p.lexically_normal();
+  if (!fs::is_regular_file(p)) r.fail("base", "case file '" + p.string() + "' not found");
+  return p;
+}
+
 bool valid_name(const std::string& s) {
   if (s.empty() || s.size() > 64 || s[0] == '.' || s[0] == '-') return false;
   for (char c : s)
@@ -299,12 +310,7 @@ SweepSpec read_sweep(const std::string& file) {
   s.name = root.text("name", fs::path(file).stem().string());
   if (!valid_name(s.name)) root.fail("name", "\"" + s.name + "\": allowed: letters, digits, '_', '-', '.'; at most 64 characters");
   s.description = root.text("description", "");
-  const std::string base = root.text("base");
-  fs::path bp = base;
-  if (bp.is_relative()) bp = fs::path(file).parent_path() / bp;
-  bp = bp.lexically_normal();
-  if (!fs::is_regular_file(bp)) root.fail("base", "case file '" + bp.string() + "' not found");
-  s.base = bp;
+  s.base = read_base(file, root);
   s.set = read_values(file, root, doc, "set");
 
   const auto groups = root.tables("group");
@@ -323,6 +329,9 @@ SweepSpec read_sweep(const std::string& file) {
     if (const auto [it, fresh] = names.emplace(sg.name, g.path()); !fresh)
       g.fail("name", "\"" + sg.name + "\" is already the name of " + it->second);
     sg.description = g.text("description", "");
+    sg.base = read_base(file, g);
+    if (sg.base.empty() && s.base.empty())
+      g.fail("base", "missing: the sweep has no top-level `base`, so every group must name its own case file");
     sg.set = read_values(file, g, gt, "set");
     sg.cross = read_cross(file, g, gt);
     sg.reference = read_values(file, g, gt, "reference");
@@ -355,6 +364,8 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
 
   std::vector<SweepRun> out;
   for (const SweepGroup& g : spec.groups) {
+    const fs::path case_file = g.base.empty() ? spec.base : g.base;
+    if (case_file.empty()) throw InputError(g.where + ".base: missing, and the sweep has no top-level `base`");
     std::vector<SweepValue> base = spec.set;
     merge(base, g.set);
 
@@ -398,6 +409,7 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
         if (ref_of.count(sig)) continue;
         SweepRun r;
         r.group = g.name;
+        r.base = case_file;
         r.is_reference = true;
         std::vector<SweepValue> named = f;
         named.insert(named.end(), g.reference.begin(), g.reference.end());
@@ -415,6 +427,7 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
     for (std::size_t i = 0; i < combos.size(); ++i) {
       SweepRun r;
       r.group = g.name;
+      r.base = case_file;
       const std::string sl = slug(combos[i]);
       r.id = g.name + "/" + index3(i) + (sl.empty() ? "" : "-" + sl);
       r.overrides = base;

@@ -1,6 +1,6 @@
-// A sweep file (docs/sweeps.md): a base case plus lists of case-key values to cross, read and
-// validated, and its expansion into the list of runs. Each run is the base case with a list of
-// `--set KEY=VALUE` overrides.
+// A sweep file (docs/sweeps.md): base cases plus lists of case-key values to cross, read and
+// validated, and its expansion into the list of runs. Each run is a base case (the sweep's, or
+// its group's own) with a list of `--set KEY=VALUE` overrides.
 #pragma once
 
 #include <filesystem>
@@ -29,6 +29,7 @@ struct SweepAxis {
 struct SweepGroup {
   std::string name;
   std::string description;
+  std::filesystem::path base;         // the group's own base case, resolved; empty = the sweep's
   std::vector<SweepValue> set;        // group overrides
   std::vector<SweepAxis> cross;       // crossed in the order written (first = outermost)
   std::vector<SweepValue> reference;  // empty = no reference runs
@@ -40,7 +41,8 @@ struct SweepSpec {
   std::string file;             // the sweep file, as given
   std::string name;             // default: the file's stem
   std::string description;
-  std::filesystem::path base;   // the base case file, resolved against the sweep file's folder
+  std::filesystem::path base;   // the base case file, resolved against the sweep file's folder;
+                                // empty if every group names its own
   std::vector<SweepValue> set;  // overrides for every run
   std::vector<SweepGroup> groups;
 };
@@ -49,6 +51,7 @@ struct SweepSpec {
 struct SweepRun {
   std::string id;      // "<group>/<NNN>-<slug>", or "<group>/reference[-<slug>]"
   std::string group;
+  std::filesystem::path base;  // the run's base case: its group's own, else the sweep's
   bool is_reference = false;
   std::vector<SweepValue> overrides;  // merged: sweep set, group set, crossed values (then reference values)
   std::vector<std::string> swept;     // keys of `overrides` that come from `cross` (or `reference`)
@@ -59,14 +62,16 @@ struct SweepRun {
   std::filesystem::path folder() const;       // "runs/<id>", relative to the sweep's output folder
 };
 
-// Reads and validates a sweep file (not the cases: see check_runs in sweep.hpp). Throws
-// InputError with a one-line message "FILE:LINE: KEY: what is wrong; allowed: ...".
+// Reads and validates a sweep file (not the cases: see check_runs in sweep.hpp). The top-level
+// `base` may be left out when every group names its own. Throws InputError with a one-line
+// message "FILE:LINE: KEY: what is wrong; allowed: ...".
 SweepSpec read_sweep(const std::string& file);
 
-// The runs of a sweep: for each group in order, its reference runs (one per distinct
-// combination of the crossed keys that `reference` does not set, in first-seen order), then the
-// cartesian product of its `cross` lists (the first key varies slowest). Throws InputError if
-// the sweep has more than 100000 runs.
+// The runs of a sweep, each on its group's base case (else the sweep's): for each group in
+// order, its reference runs (one per distinct combination of the crossed keys that `reference`
+// does not set, in first-seen order), then the cartesian product of its `cross` lists (the
+// first key varies slowest). Throws InputError if the sweep has more than 100000 runs, or if a
+// group has no base case (only for a spec that read_sweep did not make).
 std::vector<SweepRun> expand(const SweepSpec& spec);
 
 // --- pieces, exposed for tests ----------------------------------------------------------------

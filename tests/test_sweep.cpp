@@ -278,6 +278,50 @@ reference = { "time.dt" = 5e-6 }
   check_runs(spec, runs);
 }
 
+// A second case beside kCase, in a subfolder: its mesh is named "m2", so a run that crosses
+// mesh = "m2" is only valid on it.
+std::string other_case() {
+  std::string text = kCase;
+  text.replace(text.find("name = \"tiny\""), 13, "name = \"other\"");
+  text.replace(text.find("mesh = \"m\""), 10, "mesh = \"m2\"");
+  text.replace(text.find("[meshes.m]"), 10, "[meshes.m2]");
+  return text;
+}
+
+TEST_F(SweepTest, GroupBaseIsUsedForItsRunsAndTheSweepBaseForTheOthers) {
+  fs::create_directories(dir_ / "sub");
+  write("sub/other.toml", other_case());
+  const SweepSpec spec = read_sweep(write("s.toml", R"(
+base = "case.toml"
+[[group]]
+name = "top"
+cross = { "time.dt" = [1e-5, 2e-5] }
+[[group]]
+name = "own"
+base = "sub/other.toml"
+cross = { mesh = ["m2"] }
+reference = { "time.dt" = 5e-6 }
+)"));
+  EXPECT_EQ(spec.base, (dir_ / "case.toml").lexically_normal());
+  ASSERT_EQ(spec.groups.size(), 2u);
+  EXPECT_TRUE(spec.groups[0].base.empty());
+  EXPECT_EQ(spec.groups[1].base, (dir_ / "sub/other.toml").lexically_normal());
+  const auto runs = expand(spec);
+  EXPECT_EQ(ids(runs), (std::vector<std::string>{"top/000-time.dt=1e-5", "top/001-time.dt=2e-5",
+                                                 "own/reference-mesh=m2_time.dt=5e-6", "own/000-mesh=m2"}));
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    EXPECT_EQ(runs[i].base, i < 2 ? spec.base : spec.groups[1].base) << runs[i].id;  // reference runs too
+  check_runs(spec, runs);  // mesh "m2" exists only in other.toml: each run is read from its own base
+
+  // Without a top-level base, when every group has its own.
+  const SweepSpec own = read_sweep(write("s.toml", "[[group]]\nbase = \"sub/other.toml\"\ncross = { mesh = [\"m2\"] }\n"));
+  EXPECT_TRUE(own.base.empty());
+  const auto own_runs = expand(own);
+  ASSERT_EQ(own_runs.size(), 1u);
+  EXPECT_EQ(own_runs[0].base, (dir_ / "sub/other.toml").lexically_normal());
+  check_runs(own, own_runs);
+}
+
 TEST(SweepValues, TomlTextRoundTripsAndDisplays) {
   const toml::table t = toml::parse(R"(
 a = 1e-5
@@ -336,6 +380,18 @@ TEST_F(SweepTest, BadSweepFilesAreRejectedWithFileAndKey) {
                   "error_probe = \"Q\"\n",
                   {"error_probe", "no probe \"Q\"", "P"});
   expect_rejected("base = \"case.toml\"\n[[group]]\nerror_probe = \"P\"\n", {"error_probe", "reference"});
+}
+
+TEST_F(SweepTest, BadGroupBasesAreRejectedNamingTheGroup) {
+  expect_rejected("base = \"case.toml\"\n[[group]]\n[[group]]\nbase = \"nowhere.toml\"\n",
+                  {"sweep.toml:4: group[1].base: case file '", "nowhere.toml' not found"});
+  expect_rejected("[[group]]\nbase = \"case.toml\"\n[[group]]\nname = \"lost\"\n",
+                  {"sweep.toml:3: group[1].base", "missing", "top-level `base`"});
+  expect_rejected("[[group]]\nbase = 3\n", {"sweep.toml:2: group[0].base", "string"});
+  // The group's base, not the sweep's, is the case a run's override is checked against.
+  write("other.toml", other_case());
+  expect_rejected("base = \"other.toml\"\n[[group]]\nbase = \"case.toml\"\ncross = { mesh = [\"m2\"] }\n",
+                  {"sweep.toml:4: group[0].cross.mesh", "run group0/000-mesh=m2", "case.toml", "no mesh named \"m2\""});
 }
 
 TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
@@ -527,6 +583,59 @@ set = { "bodies[0].thickness" = 2.0 }
 )";
   EXPECT_EQ(run(changed).executed, 4u);
   EXPECT_EQ(run(changed, 1, 1, true).executed, 4u);
+}
+
+TEST_F(SweepTest, ResumeRerunsOnlyTheRunsOfAChangedBase) {
+  write("other.toml", other_case());
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "top"
+cross = { "time.dt" = [1e-5, 2e-5] }
+[[group]]
+name = "own"
+base = "other.toml"
+cross = { "time.dt" = [1e-5, 2e-5] }
+)";
+  ASSERT_EQ(run(sweep).executed, 4u);
+  const fs::path top = out() / "runs/top/000-time.dt=1e-5/summary.json", own = out() / "runs/own/000-time.dt=1e-5/summary.json";
+  const long long top_before = mtime_ns(top), own_before = mtime_ns(own);
+
+  // Each run records its own base: in sweep.json (the top-level `base` is the sweep's), in
+  // overrides.json (what resume compares) and in summary.csv (`case_file`, from the run).
+  const JsonValue s = read_json_file(out() / "sweep.json");
+  EXPECT_EQ(s.find("base")->text, (dir_ / "case.toml").lexically_normal().string());
+  ASSERT_EQ(s.find("runs")->items.size(), 4u);
+  EXPECT_EQ(s.find("runs")->items[0].find("base")->text, (dir_ / "case.toml").lexically_normal().string());
+  EXPECT_EQ(s.find("runs")->items[3].find("base")->text, (dir_ / "other.toml").lexically_normal().string());
+  EXPECT_EQ(read_json_file(out() / "runs/own/001-time.dt=2e-5/overrides.json").find("base")->text,
+            (dir_ / "other.toml").lexically_normal().string());
+  const Table t = read_table(out() / "summary.csv");
+  EXPECT_EQ(t.row("top/001-time.dt=2e-5").at("case"), "tiny");
+  EXPECT_EQ(t.row("own/001-time.dt=2e-5").at("case"), "other");
+  EXPECT_EQ(fs::path(t.row("own/001-time.dt=2e-5").at("case_file")), (dir_ / "other.toml").lexically_normal());
+
+  // A changed group base reruns that group's runs only.
+  write("other.toml", other_case() + "# edited\n");
+  const SweepOutcome a = run(sweep);
+  EXPECT_EQ(a.resumed, 2u);
+  EXPECT_EQ(a.executed, 2u);
+  EXPECT_EQ(mtime_ns(top), top_before);
+  EXPECT_GT(mtime_ns(own), own_before);
+
+  // A changed sweep base reruns the runs made from it only.
+  const long long own_after = mtime_ns(own);
+  write("case.toml", kCase + "# edited\n");
+  const SweepOutcome b = run(sweep);
+  EXPECT_EQ(b.resumed, 2u);
+  EXPECT_EQ(b.executed, 2u);
+  EXPECT_GT(mtime_ns(top), top_before);
+  EXPECT_EQ(mtime_ns(own), own_after);
+  EXPECT_EQ(run(sweep).executed, 0u);
+
+  // Without a top-level base, sweep.json's `base` is null.
+  ASSERT_EQ(run("[[group]]\nname = \"own\"\nbase = \"other.toml\"\ncross = { \"time.dt\" = [1e-5, 2e-5] }\n").resumed, 2u);
+  EXPECT_TRUE(read_json_file(out() / "sweep.json").find("base")->is_null());
 }
 
 TEST_F(SweepTest, DivergedAndFailedRunsAreRecordedAndTheSweepGoesOn) {
