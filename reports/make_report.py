@@ -4,14 +4,17 @@ paper's numbers, plus the work-precision diagram, the stability map, penetration
 the runs that failed or diverged.
 
     /usr/bin/python3 reports/make_report.py DIR [--accuracy ACC_DIR] [--stability PATH ...]
-                                                [--out OUT] [--no-discover]
+                                                [--verification VER_DIR] [--out OUT] [--no-discover]
 
 DIR        a finished sweep of cases/paper_table1.toml (groups table1, penalty, friction).
 --accuracy a finished sweep of cases/accuracy.toml (work-precision diagram).
 --stability stability.json files, or folders searched for them (stability map).
+--verification a finished sweep of cases/verification/sweep.toml (the verification cases, each
+           against its analytic reference: report_verification.py).
 --out      report folder (default DIR/report).
-Without --accuracy / --stability, the script looks for DIR/../accuracy, DIR/accuracy,
-DIR/../stability and DIR/stability (unless --no-discover). A source that is missing gives a
+Without --accuracy / --stability / --verification, the script looks for DIR/../accuracy,
+DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification and DIR/verification (unless
+--no-discover). A source that is missing gives a
 "not available" section saying how to produce it, never a crash.
 
 Writes OUT/index.html (self-contained apart from its relative figure links), OUT/report.md,
@@ -36,6 +39,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 
 import report_figures as F  # noqa: E402
+import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, find_stability_files, fmt_dt,  # noqa: E402
                        fmt_g, git_commit, read_reference, read_stability, same, scheme_name)
 
@@ -70,6 +74,9 @@ class Section:
         self.error = None         # the exception text if building failed
         self.label = ""           # "Figure 3"
         self.extra = []           # further tables inside a figure section: (title, header, rows)
+        self.part = None          # a group of sections under one heading (the verification cases)
+        self.part_intro = ""      # inline markdown under the part's heading
+        self.case = None          # verification case name
 
     def row_labels(self):
         return [re.sub(r"[*`]", "", r[0]) for r in self.rows]
@@ -669,7 +676,7 @@ def sec_penetration(ctx):
 def sec_failed(ctx):
     s = Section("failed", "Runs that failed or diverged (beyond the paper)", "table")
     s.header = ["run", "sweep", "status", "Δt (s)", "Δt / estimate", "at t (s)", "reason"]
-    for sw in [ctx["main"]] + ([ctx["acc"]] if ctx.get("acc") else []):
+    for sw in [ctx["main"]] + [ctx[k] for k in ("acc", "ver") if ctx.get(k)]:
         for r in sw.runs:
             if r.ok:
                 continue
@@ -717,6 +724,7 @@ SECTIONS = [
     ("work_precision", sec_work_precision),
     ("stability", sec_stability),
     ("penetration", sec_penetration),
+    ("verification", lambda c: RV.sections(c, Section)),   # one section per verification case
     ("failed", sec_failed),
     ("runs", sec_runs),
 ]
@@ -729,7 +737,8 @@ CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',Helvetica,Arial,sans-serif;max-width:1150px;
 margin:1.5em auto;padding:0 1em;color:#222;line-height:1.45}
 h1{font-size:1.6em;margin-bottom:.2em} h2{margin-top:1.8em;border-bottom:1px solid #ccc}
-h3{font-size:1.05em}
+h3{font-size:1.05em} h3.sec{font-size:1.2em;margin-top:1.6em}
+.part-intro{font-size:.92em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
 th{background:#f0f0f0} td.diverged{background:#fdecea}
@@ -749,8 +758,13 @@ def render(ctx, sections):
     for k, v in meta:
         md.append(f"- **{k}:** {v}")
     md.append("")
+    part = None
     for s in sections:
-        md.append(f"## {s.number}: {s.title}")
+        if s.part != part:
+            part = s.part
+            if part:
+                md += [f"## {part}", "", s.part_intro, ""]
+        md.append(f"{'###' if s.part else '##'} {s.number}: {s.title}")
         md.append("")
         if s.error:
             md.append(f"**Error while building this section:** `{s.error}`")
@@ -792,14 +806,30 @@ def render(ctx, sections):
         h.append(f"<tr><td><b>{html.escape(k)}</b></td><td>{md_inline_to_html(v)}</td></tr>")
     h.append("</table>")
     h.append("<h2>Contents</h2><ol>")
+    part = None
     for s in sections:
+        if s.part != part:
+            if part:
+                h.append("</ul></li>")
+            part = s.part
+            if part:
+                h.append(f'<li><a href="#part-{part_id(part)}">{html.escape(part)}</a><ul>')
         flag = "" if s.available and not s.error else " — <b>not available</b>"
         h.append(f'<li><a href="#{s.id}">{html.escape(s.number)}: {html.escape(s.title)}</a>'
                  f"{flag}</li>")
+    if part:
+        h.append("</ul></li>")
     h.append("</ol>")
+    part = None
     for s in sections:
-        h.append(f'<section id="sec-{s.id}"><h2 id="{s.id}">{html.escape(s.number)}: '
-                 f"{html.escape(s.title)}</h2>")
+        if s.part != part:
+            part = s.part
+            if part:
+                h.append(f'<h2 id="part-{part_id(part)}">{html.escape(part)}</h2>')
+                h.append(f'<p class="part-intro">{md_inline_to_html(s.part_intro)}</p>')
+        hx = '<h3 class="sec"' if s.part else "<h2"
+        h.append(f'<section id="sec-{s.id}">{hx} id="{s.id}">{html.escape(s.number)}: '
+                 f"{html.escape(s.title)}</{hx[1:3]}>")
         if s.error:
             h.append(f'<div class="na not-available"><b>Error while building this section:</b> '
                      f"<code>{html.escape(s.error)}</code></div></section>")
@@ -834,11 +864,12 @@ def render(ctx, sections):
     # ---- manifest (for tests and tools)
     man = {"generated_at": ctx["now"], "sweep": ctx["main"].dir,
            "accuracy": ctx["acc"].dir if ctx.get("acc") else None,
+           "verification": ctx["ver"].dir if ctx.get("ver") else None,
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
             "id": s.id, "number": s.number, "title": s.title, "kind": s.kind,
-            "paper": s.paper, "available": s.available and not s.error, "error": s.error,
+            "paper": s.paper, "part": s.part, "case": s.case, "available": s.available and not s.error, "error": s.error,
             "missing": s.missing or None, "files": s.files, "runs": s.runs,
             "sources": s.sources,
             "tables": ([{"id": s.id, "rows": s.row_labels()}] if s.kind == "table" and
@@ -848,6 +879,10 @@ def render(ctx, sections):
     with open(os.path.join(out, "manifest.json"), "w") as f:
         json.dump(man, f, indent=1)
         f.write("\n")
+
+
+def part_id(title):
+    return re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")
 
 
 def discover(main_dir, args):
@@ -862,7 +897,13 @@ def discover(main_dir, args):
     if not stab and not args.no_discover:
         stab = [c for c in (os.path.join(parent, "stability"), os.path.join(main_dir, "stability"))
                 if os.path.isdir(c)]
-    return acc, stab
+    ver = args.verification
+    if ver is None and not args.no_discover:
+        for c in (os.path.join(parent, "verification"), os.path.join(main_dir, "verification")):
+            if os.path.exists(os.path.join(c, "summary.csv")):
+                ver = c
+                break
+    return acc, stab, ver
 
 
 def main(argv=None):
@@ -871,9 +912,11 @@ def main(argv=None):
     ap.add_argument("--accuracy", help="accuracy sweep folder (cases/accuracy.toml)")
     ap.add_argument("--stability", nargs="*", default=None,
                     help="stability.json files or folders holding them")
+    ap.add_argument("--verification", metavar="VER_DIR",
+                    help="verification sweep folder (cases/verification/sweep.toml)")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--no-discover", action="store_true",
-                    help="do not look for accuracy/ and stability/ next to DIR")
+                    help="do not look for accuracy/, stability/ and verification/ next to DIR")
     args = ap.parse_args(argv)
     try:
         main_sweep = Sweep(args.dir)
@@ -882,18 +925,24 @@ def main(argv=None):
         return 2
     out = os.path.abspath(args.out or os.path.join(args.dir, "report"))
     os.makedirs(out, exist_ok=True)
-    acc_dir, stab_paths = discover(args.dir, args)
+    acc_dir, stab_paths, ver_dir = discover(args.dir, args)
     acc, acc_err = None, None
     if acc_dir:
         try:
             acc = Sweep(acc_dir)
         except (OSError, ValueError) as e:
             acc_err = str(e)
+    ver, ver_err = None, None
+    if ver_dir:
+        try:
+            ver = Sweep(ver_dir)
+        except (OSError, ValueError) as e:
+            ver_err = str(e)
     stab_files = find_stability_files(stab_paths)
     ref = read_reference()
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     ctx = {"main": main_sweep, "acc": acc, "stab_files": stab_files, "ref": ref, "out": out,
-           "now": now}
+           "now": now, "ver": ver, "ver_err": ver_err}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -909,6 +958,9 @@ def main(argv=None):
                         f"{main_sweep.meta.get('repeat', '?')})"),
         ("Accuracy sweep", f"`{acc.dir}` ({len(acc.runs)} runs)" if acc else
          ("not available" + (f" ({acc_err})" if acc_err else "") + f": run `{ACC_CMD}`")),
+        ("Verification sweep", f"`{ver.dir}` ({len(ver.runs)} runs; references "
+                               "`reference/verification.toml`)" if ver else
+         ("not available" + (f" ({ver_err})" if ver_err else "") + f": run `{RV.VER_CMD}`")),
         ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
                                if stab_files else f"not available: run `{STAB_CMD}` {STAB_MORE}")),
         ("Program", f"ricochet {main_sweep.version()}, `{program}`"
@@ -923,6 +975,7 @@ def main(argv=None):
 
     sections = []
     nfig = ntab = 0
+    built = []
     for sid, fn in SECTIONS:
         try:
             s = fn(ctx)
@@ -930,6 +983,8 @@ def main(argv=None):
             s = Section(sid, sid, "figure")
             s.error = f"{type(e).__name__}: {e}"
             traceback.print_exc()
+        built += s if isinstance(s, list) else [s]
+    for s in built:
         if s.kind == "figure":
             nfig += 1
             s.number = f"Figure {nfig}"

@@ -368,3 +368,157 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts):
     ax.grid(True, which="both", axis="y", alpha=0.25)
     ax.grid(False, axis="x")
     return save(fig, outdir, stem)
+
+
+# ---------------------------------------------------------------------------------------------
+# Verification cases (report_verification.py): the analytic reference beside every run
+
+def _styles(runs):
+    """One (colour, line style) per run: the scheme's colour; a second run of the same scheme
+    gets a dashed line, a third a dotted one."""
+    seen, out = {}, []
+    for _, r in runs:
+        k = seen.get(r.scheme, 0)
+        seen[r.scheme] = k + 1
+        out.append(dict(color=color(r.scheme), ls=DT_STYLES[k % len(DT_STYLES)]))
+    return out
+
+
+def _alternates(f):
+    """True when a force history jumps from step to step by more than a third of its size
+    (the implicit scheme's wall contact)."""
+    pos = f[f > 0]
+    if len(f) < 8 or pos.size < 4:
+        return False
+    return float(np.median(np.abs(np.diff(f)))) > float(np.median(pos)) / 3
+
+
+def _running_mean(t, f, n):
+    if len(f) < n:
+        return t, f
+    k = np.ones(n) / n
+    return np.convolve(t, k, mode="valid"), np.convolve(f, k, mode="valid")
+
+
+def fig_ver_contact_force(outdir, stem, runs, force, duration, p_ref, ref_label, p_label,
+                          conserved=False):
+    """Top row: normal_force (kN) against time (µs), one panel per run (shared scale), with the
+    analytic plateau `force` for `duration`. Bottom: momentum_x of every run with p_ref(t) (or,
+    with conserved, each run's initial value)."""
+    import textwrap
+    n = len(runs)
+    fig = plt.figure(figsize=(max(10.5, 2.6 * n + 3.0), 6.8))
+    gs = fig.add_gridspec(2, n, height_ratios=[1.15, 1.0], hspace=0.5, wspace=0.08)
+    styles = _styles(runs)
+    top = []
+    alternating = False
+    fmax = 0.0
+    for j, ((label, r), st) in enumerate(zip(runs, styles)):
+        ax = fig.add_subplot(gs[0, j], sharey=top[0] if top else None)
+        top.append(ax)
+        h = r.history()
+        t, f = h["time"] * 1e6, h["normal_force"] / 1e3
+        fmax = max(fmax, float(np.nanmax(f)))
+        if force and duration:
+            tend = max(float(t[-1]), duration * 1e6)
+            ax.plot([0, duration * 1e6, duration * 1e6, tend], [force / 1e3] * 2 + [0, 0],
+                    color="k", ls="--", lw=1.3, zorder=3)
+        if _alternates(h["normal_force"]):
+            alternating = True
+            ax.plot(t, f, color=st["color"], lw=0.5, alpha=0.3)
+            tm, fm = _running_mean(t, f, 2)
+            ax.plot(tm, fm, color=st["color"], lw=1.5)
+        else:
+            ax.plot(t, f, color=st["color"], lw=1.5)
+        ax.set_title("\n".join(textwrap.wrap(label, 26)), fontsize=9)
+        ax.set_xlabel("time t (µs)")
+        if j == 0:
+            ax.set_ylabel("contact force normal_force (kN)")
+        else:
+            plt.setp(ax.get_yticklabels(), visible=False)
+    if force:
+        topv = min(fmax, 2.5 * force / 1e3) * 1.08
+        top[0].set_ylim(-0.04 * topv, topv)
+    handles = ([Line2D([0], [0], color="k", ls="--", lw=1.3, label=ref_label)]
+               if force and duration else [])
+    handles.append(Line2D([0], [0], color="0.3", lw=1.5, label="run: every sample"))
+    if alternating:
+        handles += [Line2D([0], [0], color="0.3", lw=0.5, alpha=0.4,
+                           label="every step (force alternating)"),
+                    Line2D([0], [0], color="0.3", lw=1.5, label="…its mean over 2 steps")]
+    top[-1].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.03, 1.0),
+                   frameon=False)
+    ax = fig.add_subplot(gs[1, :])
+    for (label, r), st in zip(runs, styles):
+        h = r.history()
+        ax.plot(h["time"] * 1e6, h["momentum_x"], lw=1.4, label=label, **st)
+        if conserved:
+            ax.axhline(h["momentum_x"][0], color=st["color"], lw=0.8, ls=":")
+    if p_ref is not None:
+        tt = np.linspace(0.0, max(float(r.history()["time"][-1]) for _, r in runs), 600)
+        pr = p_ref(tt)
+        if pr is not None:
+            ax.plot(tt * 1e6, pr, color="k", ls="--", lw=1.3, label=p_label)
+    ax.set_xlabel("time t (µs)")
+    ax.set_ylabel("momentum_x (kg·m/s)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return save(fig, outdir, stem)
+
+
+def fig_ver_sliding(outdir, stem, series, v0, a, t_stop):
+    """series = [(label, run, t, v)]: velocity against time beside max(v0 - a t, 0), and the
+    difference from it (mm/s)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    styles = _styles([(lab, r) for lab, r, _, _ in series])
+
+    def v_ref(t):
+        return np.maximum(v0 - a * t, 0.0)
+    tend = max(float(t[-1]) for _, _, t, _ in series)
+    tt = np.linspace(0.0, tend, 1000)
+    axes[0].plot(tt, v_ref(tt), color="k", ls="--", lw=1.6, zorder=20,
+                 label="analytic max(v₀ − μg t, 0)")
+    n = len(series)
+    for i, ((label, r, t, v), st) in enumerate(zip(series, styles)):
+        # the first runs on top: the penalty run's larger wiggles must not hide the others
+        axes[0].plot(t, v, lw=1.2, label=label, zorder=2 + n - i, **st)
+        axes[1].plot(t, 1e3 * (v - v_ref(t)), lw=0.9, label=label, zorder=2 + n - i, **st)
+    for ax in axes:
+        ax.axvline(t_stop, color="0.3", ls=":", lw=1.2)
+        ax.set_xlabel("time t (s)")
+        ax.set_xlim(0, tend)
+    axes[0].text(t_stop, 0.12 * v0, f" stop v₀/(μg)\n = {t_stop:.4g} s", fontsize=8,
+                 va="bottom", color="0.25")
+    axes[0].set_ylabel("velocity momentum_x / m (m/s)")
+    axes[0].set_title("centre-of-mass velocity")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].set_ylabel("momentum_x / m − analytic (mm/s)")
+    axes[1].set_title("difference from the analytic velocity")
+    axes[1].legend(loc="lower left", fontsize=8)
+    return save(fig, outdir, stem)
+
+
+def fig_ver_impulse(outdir, stem, runs, mu):
+    """The impulse path Δp_x against Δp_y (with |Δp_x| = μ Δp_y) and angular_momentum(t)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    styles = _styles(runs)
+    ymax = 0.0
+    for (label, r), st in zip(runs, styles):
+        h = r.history()
+        dx, dy = h["momentum_x"] - h["momentum_x"][0], h["momentum_y"] - h["momentum_y"][0]
+        ymax = max(ymax, float(np.max(dy)))
+        axes[0].plot(dy, dx, lw=1.3, label=label, **st)
+        axes[1].plot(ms(h["time"]), h["angular_momentum"], lw=1.3, label=label, **st)
+    if mu and ymax > 0:
+        yy = np.array([0.0, ymax])
+        axes[0].plot(yy, mu * yy, color="k", ls="--", lw=1.2, label=f"|Δp_x| = μ Δp_y, μ = {mu:g}")
+        axes[0].plot(yy, -mu * yy, color="k", ls="--", lw=1.2)
+    axes[0].set_xlabel("normal impulse Δp_y (kg·m/s)")
+    axes[0].set_ylabel("tangential impulse Δp_x (kg·m/s)")
+    axes[0].set_title("impulse path")
+    axes[1].set_xlabel("time t (ms)")
+    axes[1].set_ylabel("angular_momentum (kg·m²/s)")
+    axes[1].set_title("spin")
+    for ax in axes:
+        ax.legend(loc="best", fontsize=8)
+    return save(fig, outdir, stem)

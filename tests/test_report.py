@@ -5,12 +5,16 @@ Builds, in a temporary folder and with the given ricochet binary:
   * a tiny paper sweep: the groups of cases/paper_table1.toml (table1, penalty, friction) on the
     oblique plate with coarse meshes (M1 4 x 8, M2 6 x 14 cells), all the paper's Δt;
   * a tiny accuracy sweep (two schemes, a reference run each, one diverged run);
-  * two stability searches (semi-explicit bracketed, implicit up to the cap).
-Then runs the report twice: without the accuracy and stability sources (those two sections
-must say "not available" and how to produce them, everything else must be there), and with
-them (every section available). Checks that every figure file exists and is non-empty, that
-every table has its expected rows (computed here from the sweeps' summary.csv), and that every
-figure's caption names its runs.
+  * two stability searches (semi-explicit bracketed, implicit up to the cap);
+  * a tiny verification sweep: the groups of cases/verification/sweep.toml (bar_wall with the
+    three schemes and a second penalty run at another scale factor; sliding_block with the three
+    schemes) on coarse meshes.
+Then runs the report twice: without the accuracy, stability and verification sources (those
+sections must say "not available" and how to produce them, everything else must be there), and
+with them (every section available, except the verification cases not in the tiny sweep, which
+must say so). Checks that every figure file exists and is non-empty, that every table has its
+expected rows and columns (computed here from the sweeps' summary.csv), and that every figure's
+caption names its runs.
 
     /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
 """
@@ -19,6 +23,7 @@ import csv
 import html.parser
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -29,7 +34,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
 SCRIPT = os.path.join(REPO, "reports", "make_report.py")
 BASE = os.path.join(REPO, "cases", "oblique_plate.toml")
+VER_BASE = os.path.join(REPO, "cases", "verification", "bar_wall.toml")
 PY = sys.executable or "/usr/bin/python3"
+sys.path.insert(0, os.path.join(REPO, "reports"))
+import report_verification as RV  # noqa: E402  (the case specs: which sections to expect)
 
 BINARY = None
 
@@ -74,6 +82,44 @@ cross = {{ "time.dt" = [1e-4, 2e-5, 1e-5] }}
 reference = {{ "time.dt" = 1e-6 }}
 """
 
+# cases/verification/sweep.toml's groups, coarse: bar 50 x 2 cells, block 5 x 2 cells, 0.4 s
+BLOCK = ('name = "sliding_block", gravity = [0.0, -9.81], mesh = "block", meshes = { block = { '
+         'generator = "rectangle", width = 0.1, height = 0.05, nx = 5, ny = 2 } }, bodies = [{ '
+         'name = "block", element = "q4", thickness = 0.05, velocity = [1.0, 0.0], material = { '
+         'model = "saint_venant_kirchhoff", young = 1.0e9, poisson = 0.3, density = 1000.0 } }], '
+         'obstacles = [{ name = "ground", type = "line", point = [0.0, 0.0], normal = [0.0, 1.0], '
+         'friction = 0.3 }], "time.end" = 0.4, "output.interval" = 2.0e-3, "output.probes" = '
+         '[{ name = "centre", point = [0.05, 0.025] }]')
+
+VER_SWEEP = f"""
+name = "tiny_verification"
+description = "report smoke test: the verification sweep's groups on coarse meshes"
+base = "{VER_BASE}"
+set = {{ "meshes.bar.nx" = 50 }}
+
+[[group]]
+name = "bar"
+cross = {{ scheme = ["semi_explicit", "explicit_penalty"] }}
+
+[[group]]
+name = "bar_implicit"
+set = {{ scheme = "implicit", "time.dt" = 4e-7 }}
+
+[[group]]
+name = "bar_penalty_stiff"
+set = {{ scheme = "explicit_penalty", "penalty.scale_factor" = 1.0 }}
+
+[[group]]
+name = "block"
+set = {{ {BLOCK} }}
+cross = {{ scheme = ["semi_explicit", "explicit_penalty"] }}
+
+[[group]]
+name = "block_implicit"
+set = {{ {BLOCK}, scheme = "implicit", "time.dt" = 1e-4 }}
+"""
+VER_CASES = ("bar_wall", "sliding_block")  # in the tiny sweep; the other specs must be "not available"
+
 
 def run(cmd, ok=(0,), **kw):
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
@@ -93,6 +139,7 @@ class Tables(html.parser.HTMLParser):
     def __init__(self):
         super().__init__()
         self.tables = {}
+        self.headers = {}
         self.cur = None
         self.row = None
         self.cell = None
@@ -109,10 +156,16 @@ class Tables(html.parser.HTMLParser):
             self.row = []
         elif tag == "td" and self.row is not None:
             self.cell = ""
+        elif tag == "th" and self.cur and not self.in_body:
+            self.headers.setdefault(self.cur, [])
+            self.cell = ""
 
     def handle_endtag(self, tag):
         if tag == "td" and self.cell is not None:
             self.row.append(self.cell.strip())
+            self.cell = None
+        elif tag == "th" and self.cell is not None:
+            self.headers[self.cur].append(self.cell.strip())
             self.cell = None
         elif tag == "tr" and self.row is not None:
             self.tables[self.cur].append(self.row)
@@ -143,26 +196,31 @@ class ReportSmoke(unittest.TestCase):
             f.write(PAPER_SWEEP)
         with open(os.path.join(t, "accuracy.toml"), "w") as f:
             f.write(ACC_SWEEP)
+        with open(os.path.join(t, "verification.toml"), "w") as f:
+            f.write(VER_SWEEP)
         cls.paper = os.path.join(t, "sweeps", "paper")
         cls.acc = os.path.join(t, "other", "acc")
         cls.stab = os.path.join(t, "other", "stab")
+        cls.ver = os.path.join(t, "other", "ver")
         run([BINARY, "sweep", os.path.join(t, "paper.toml"), "--out", cls.paper, "--jobs", "2",
              "--quiet"])
         run([BINARY, "sweep", os.path.join(t, "accuracy.toml"), "--out", cls.acc, "--jobs", "2",
              "--quiet"])
+        run([BINARY, "sweep", os.path.join(t, "verification.toml"), "--out", cls.ver, "--jobs",
+             "2", "--quiet"])
         coarse = ["--set", "meshes.M1.nx=4", "--set", "meshes.M1.ny=8"]
         run([BINARY, "stability", BASE, *coarse, "--end", "1e-3", "--max-runs", "8",
              "--out", os.path.join(cls.stab, "semi_explicit_M1"), "--quiet"], ok=(0, 4, 5))
         run([BINARY, "stability", BASE, *coarse, "--set", "scheme=implicit", "--energy-bound", "1",
              "--end", "1e-3", "--max-runs", "8", "--out", os.path.join(cls.stab, "implicit_M1"),
              "--quiet"], ok=(0, 4, 5))
-        # 1: no accuracy / stability sources, default output folder DIR/report
+        # 1: no accuracy / stability / verification sources, default output folder DIR/report
         run([PY, SCRIPT, cls.paper, "--no-discover"])
         cls.out_bare = os.path.join(cls.paper, "report")
         # 2: every source
         cls.out_full = os.path.join(t, "full_report")
         run([PY, SCRIPT, cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
-             "--out", cls.out_full])
+             "--verification", cls.ver, "--out", cls.out_full])
 
     @classmethod
     def tearDownClass(cls):
@@ -198,7 +256,7 @@ class ReportSmoke(unittest.TestCase):
     def test_bare_report_says_what_is_missing(self):
         man, page = self.check_files(self.out_bare)
         by_id = {s["id"]: s for s in man["sections"]}
-        for sid in ("work_precision", "stability"):
+        for sid in ("work_precision", "stability", "verification"):
             self.assertFalse(by_id[sid]["available"], sid)
             sec = section_html(page, sid)
             self.assertIn("not-available", sec)
@@ -206,22 +264,33 @@ class ReportSmoke(unittest.TestCase):
         self.assertIn("cases/accuracy.toml", section_html(page, "work_precision"))
         self.assertIn("ricochet stability", section_html(page, "stability").replace(
             "build/ricochet stability", "ricochet stability"))
+        self.assertIn("cases/verification/sweep.toml", section_html(page, "verification"))
+        self.assertFalse([s for s in by_id if s.startswith("ver_")])
         for sid, s in by_id.items():
-            if sid not in ("work_precision", "stability"):
+            if sid not in ("work_precision", "stability", "verification"):
                 self.assertTrue(s["available"], f"{sid}: {s['missing']}")
         with open(os.path.join(self.out_bare, "report.md")) as f:
             md = f.read()
-        self.assertEqual(md.count("**Not available:**"), 2)
+        self.assertEqual(md.count("**Not available:**"), 3)
 
     def test_full_report_has_every_section(self):
         man, page = self.check_files(self.out_full)
+        ver_ids = {"ver_" + c.case for c in RV.CASES}
+        ver_ok = {"ver_" + c for c in VER_CASES}
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
-                    "work_precision", "stability", "penetration", "failed", "runs"}
+                    "work_precision", "stability", "penetration", "failed", "runs"} | ver_ids
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
         for sid, s in by_id.items():
-            self.assertTrue(s["available"], f"{sid}: {s['missing']}")
-        self.assertNotIn("not-available", page)
+            if sid in ver_ids - ver_ok:
+                # a case of the spec that the sweep does not run: says so, with the command
+                self.assertFalse(s["available"], sid)
+                self.assertIn("cases/verification/sweep.toml", s["missing"])
+                self.assertIn("not-available", section_html(page, sid))
+            else:
+                self.assertTrue(s["available"], f"{sid}: {s['missing']}")
+                self.assertNotIn("not-available", section_html(page, sid))
+            self.assertEqual(s["part"] == RV.PART_TITLE, sid in ver_ids, sid)
         # figures: expected files, caption names the runs
         for sid, stem in (("fig1", "fig1_deformed_shapes"), ("fig2", "fig2_von_mises_0.6ms"),
                           ("fig3", "fig3_energies_M2"), ("fig4", "fig4_energy_error"),
@@ -229,7 +298,8 @@ class ReportSmoke(unittest.TestCase):
                           ("fig6", "fig6_P_displacement_mu0.1"),
                           ("fig7", "fig7_friction_dissipation"),
                           ("work_precision", "work_precision"), ("stability", "stability_map"),
-                          ("penetration", "penetration")):
+                          ("penetration", "penetration"),
+                          *((f"ver_{c}", f"verification_{c}") for c in VER_CASES)):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -272,10 +342,37 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(len(tables["tab-stability_table"]), 2)
         self.assertEqual(first("tab-penetration_table"),
                          [r["run_id"] for r in main if r["status"] == "ok"])
-        not_ok = [r["run_id"] for r in main + acc if r["status"] != "ok"]
+        ver = read_csv(os.path.join(self.ver, "summary.csv"))
+        not_ok = [r["run_id"] for r in main + acc + ver if r["status"] != "ok"]
         self.assertTrue(not_ok)  # the tiny sweeps have diverged runs
         self.assertEqual(first("tab-failed"), not_ok)
         self.assertEqual(first("tab-runs"), [r["run_id"] for r in main])
+        # verification: per case, the reference column, then every run in scheme order, and the
+        # spec's quantities as rows, each with its reference and a relative error per run
+        specs = {c.case: c for c in RV.CASES}
+        order = {sc: k for k, sc in enumerate(RV.SCHEMES)}
+        for case in VER_CASES:
+            tid = f"tab-ver_{case}_table"
+            hdr, rows = parser.headers[tid], tables[tid]
+            runs = sorted([r for r in ver if r["case"] == case],
+                          key=lambda r: (order[r["summary.scheme"]], ver.index(r)))
+            self.assertEqual(hdr[:2], ["quantity", f"analytic reference ([{specs[case].ref}])"])
+            self.assertEqual(len(hdr), 2 + len(runs))
+            for sc in RV.SCHEMES:  # the three schemes
+                self.assertTrue(any(h.startswith(RV.scheme_name(sc)) for h in hdr[2:]),
+                                (case, sc))
+            self.assertEqual(rows[0], ["run", "–"] + [r["run_id"] for r in runs])
+            labels = [re.sub(r"[*`]", "", q.label) for q in specs[case].quantities]
+            self.assertEqual([r[0] for r in rows],
+                             ["run", "Δt"] + labels + ["energy_error_max", "penetration_max"])
+            for row in rows[2:2 + len(labels)]:
+                self.assertNotIn("missing", row[1], (case, row[0]))  # reference found
+                for cell in row[2:]:
+                    self.assertRegex(cell, r"\d.*\(.*%.*\)", (case, row[0]))
+        # two penalty runs of the bar: one column each, told apart by the scale factor
+        bar_hdr = parser.headers["tab-ver_bar_wall_table"]
+        self.assertIn("explicit penalty, penalty.scale_factor = 0.1", bar_hdr)
+        self.assertIn("explicit penalty, penalty.scale_factor = 1", bar_hdr)
         # the manifest agrees with the page
         man = self.manifest(self.out_full)
         for s in man["sections"]:
@@ -289,7 +386,14 @@ class ReportSmoke(unittest.TestCase):
                       "M2, Δt = 1e-4 s | M2, Δt = 1e-5 s | M2, Δt = 1e-6 s |", md)
         self.assertIn("| **Semi-explicit** |", md)
         self.assertIn("| **Implicit** |", md)
-        self.assertNotIn("Not available", md)
+        self.assertIn("## Verification cases: analytic reference against the three schemes", md)
+        self.assertIn("| quantity | analytic reference ([bar_wall]) | semi-explicit | implicit | "
+                      "explicit penalty, penalty.scale_factor = 0.1 | explicit penalty, "
+                      "penalty.scale_factor = 1 |", md)
+        self.assertIn("![Bar on a rigid wall", md)
+        # only the verification cases that the tiny sweep does not run are not available
+        missing = len(RV.CASES) - len(VER_CASES)
+        self.assertEqual(md.count("**Not available:**"), missing)
 
 
 def main():
