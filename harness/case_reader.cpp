@@ -19,7 +19,7 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
     if (p.is_relative()) p = dir / p;
     m.source = GmshFile{p};
   } else {
-    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate"});
+    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk"});
     if (gen == "rectangle") {
       RectangleSpec r;
       r.width = t.number("width", Range::positive());
@@ -29,6 +29,12 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
       r.origin = t.vec2("origin", Vec2::Zero());
       r.triangles = t.choice("cells", "quad", {"quad", "tri"}) == "tri";
       m.source = r;
+    } else if (gen == "disk") {
+      DiskSpec d;
+      d.radius = t.number("radius", Range::positive());
+      d.center = t.vec2("center", Vec2::Zero());
+      d.n = static_cast<int>(t.integer("n", 8, 1, kMaxDivisions));
+      m.source = d;
     } else {
       ArcPlateSpec a;
       a.width = t.number("width", Range::positive());
@@ -264,9 +270,28 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
       if (!known) obstacles[i].fail("friction_by_body", "no body named \"" + body + "\"");
     }
   }
-  if (!c.obstacles.empty() && c.scheme == "explicit")
-    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] need \"semi_explicit\", "
-                        "\"implicit\" or \"explicit_penalty\"");
+  const auto pairs = root.tables("contact_pairs");
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const TableReader& t = pairs[i];
+    ContactPairSpec cp;
+    cp.where = t.path();
+    cp.slave = t.text("slave");
+    cp.master = t.text("master");
+    cp.friction = t.number("friction", 0.0, Range::non_negative());
+    cp.two_pass = t.boolean("two_pass", false);
+    t.finish();
+    for (const char* key : {"slave", "master"}) {
+      const std::string& name = std::string(key) == "slave" ? cp.slave : cp.master;
+      bool known = false;
+      for (const auto& b : c.bodies) known = known || b.name == name;
+      if (!known) t.fail(key, "no body named \"" + name + "\"");
+    }
+    if (cp.slave == cp.master) t.fail("master", "must differ from slave (self-contact is not treated)");
+    c.contact_pairs.push_back(std::move(cp));
+  }
+  if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == "explicit")
+    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] or [[contact_pairs]] need "
+                        "\"semi_explicit\", \"implicit\" or \"explicit_penalty\"");
   if (const auto ct = root.table("contact")) {
     c.contact.level = ct->choice("level", "position", {"position", "velocity"}) == "position"
                           ? ContactLevel::position

@@ -16,6 +16,8 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
       mesh = make_rectangle(*r);
     else if (const auto* a = std::get_if<ArcPlateSpec>(&m.source))
       mesh = make_arc_plate(*a);
+    else if (const auto* d = std::get_if<DiskSpec>(&m.source))
+      mesh = make_disk(*d);
     else
       mesh = read_gmsh(std::get<GmshFile>(m.source).path);
   } catch (const InputError& e) {
@@ -128,6 +130,11 @@ PreparedCase prepare_case(const CaseSpec& spec) {
       const auto it = c.obstacles[o].friction_by_body.find(c.bodies[b].name);
       s.friction[b][o] = it != c.obstacles[o].friction_by_body.end() ? it->second : c.obstacles[o].friction;
     }
+  for (const ContactPairSpec& cp : c.contact_pairs) {
+    const int slave = body_index(c, cp.slave, cp.where, "slave"), master = body_index(c, cp.master, cp.where, "master");
+    s.body_pairs.push_back({slave, master, cp.friction});
+    if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction});
+  }
   s.contact = c.contact;
   s.penalty = c.penalty;
   s.contact_method = c.scheme == "explicit_penalty" ? RunSettings::ContactMethod::penalty
@@ -136,8 +143,9 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   // combined limit 1/sqrt(1/dt_e^2 + 1/dt_p^2) of elements and springs (dt_p = min 2 sqrt(m/k)):
   // min(dt_e, dt_p) alone is not stable when the two are close (tests/test_penalty_contact.cpp).
   s.dt = stable_time_step(p.model, c.dt_safety);
-  if (s.contact_method == RunSettings::ContactMethod::penalty && !s.obstacles.empty()) {
-    const PenaltyState springs = make_penalty_state(p.model, s.obstacles, s.friction, s.prescribed, s.penalty);
+  if (s.contact_method == RunSettings::ContactMethod::penalty && (!s.obstacles.empty() || !s.body_pairs.empty())) {
+    const PenaltyState springs =
+        make_penalty_state(p.model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
     p.penalty_critical_dt = penalty_critical_dt(p.model, springs);
     s.dt = penalty_stable_time_step(p.model, springs, c.dt_safety);
   }

@@ -23,7 +23,7 @@ struct GmshFile {
 
 struct MeshSpec {
   std::string name;
-  std::variant<RectangleSpec, ArcPlateSpec, GmshFile> source;
+  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile> source;
   double scale = 1.0;            // coordinates multiplied by this [-]
   Vec2 offset = Vec2::Zero();    // then translated by this [m]
   std::string where;             // key path for error messages, e.g. "meshes.M1"
@@ -82,6 +82,15 @@ struct ObstacleSpec {
   std::string where;
 };
 
+// Contact between two bodies, node to segment (solver/body_contact.hpp).
+struct ContactPairSpec {
+  std::string slave;       // body whose boundary nodes are checked
+  std::string master;      // body whose boundary segments they are checked against
+  double friction = 0.0;   // mu [-]
+  bool two_pass = false;   // also the master's nodes against the slave's segments
+  std::string where;
+};
+
 struct CaseSpec {
   std::string file;  // as given
   std::string name;
@@ -97,6 +106,7 @@ struct CaseSpec {
   std::vector<BodySpec> bodies;
   std::vector<BoundarySpec> boundaries;
   std::vector<ObstacleSpec> obstacles;
+  std::vector<ContactPairSpec> contact_pairs;
   ContactSettings contact;
   ImplicitSettings implicit;
   PenaltySettings penalty;

@@ -42,4 +42,32 @@ struct ArcPlateSpec {
 };
 Mesh make_arc_plate(const ArcPlateSpec& spec);
 
+// A disk of radius R about `center`, all Q4, as an "O-grid" (butterfly): a central block of
+// n x n cells and four ring blocks of n x nr cells, nr = ceil(n/2), one per side of the
+// central block. n is the number of cells along a quarter of the rim (4n rim edges).
+// - The rim nodes are centre + R (cos, sin) of the angles -pi/4 + k pi/(2n), k = 0 .. 4n-1,
+//   computed per quarter with exact 90-degree swaps, so the mesh has the symmetries of the
+//   square to round-off and the rim node at the bottom (even n) is exactly centre - (0, R).
+// - The central block's sides bulge: each side point is 0.7 x the square of half-width
+//   0.4 R plus 0.3 x the circle through its corners, at the same angle. This raises the block
+//   corner angle from 90 to about 120 degrees, so the three cells at a block corner get
+//   similar angles (cell angles within 61-126 degrees for n >= 3; n = 1 is a square block in
+//   four trapezoids, 45-135). The block's interior nodes are the transfinite (Coons)
+//   interpolation of its sides.
+// - Ring nodes lie on the straight line from a block side node to its rim node, graded
+//   geometrically as in a log-polar grid (radial size proportional to the local circumference),
+//   so the ring cells are near square; nr = ceil(n/2) follows from ln(R/0.45 R)/(pi/(2n)).
+// The polygon of rim nodes has area 2 n R^2 sin(pi/(2n)), which converges to pi R^2 at second
+// order. Nodes: the central block's (n+1)^2 row by row, then the rings outwards, 4n nodes each,
+// counter-clockwise from the angle -pi/4. Cells are counter-clockwise.
+// Node sets: boundary (the rim), all, center (the node at the centre; even n only), lowest,
+// highest, leftmost, rightmost (the rim node at the extreme for even n; the two rim nodes
+// nearest it for odd n).
+struct DiskSpec {
+  double radius = 1.0;          // R [m], finite and > 0
+  Vec2 center = Vec2::Zero();   // [m], finite
+  int n = 8;                    // cells along a quarter of the rim, >= 1
+};
+Mesh make_disk(const DiskSpec& spec);
+
 }  // namespace ricochet

@@ -107,7 +107,9 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   else
     j["friction_coeff"] = pc.settings.friction.front().front();
   j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
-  j["contact_level"] = pc.settings.obstacles.empty() || pc.spec.scheme == "explicit_penalty" ? Json()
+  j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
+  const bool any_contact = !pc.settings.obstacles.empty() || !pc.settings.body_pairs.empty();
+  j["contact_level"] = !any_contact || pc.spec.scheme == "explicit_penalty" ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
@@ -160,6 +162,9 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   ci["mean"] = r.contact_sweeps_mean;
   ci["max"] = r.contact_sweeps_max;
   ci["steps_with_contact"] = r.contact_steps;
+  // The time with at least one active contact, steps x dt [s]: a contact duration that gates
+  // can compare across time steps and meshes.
+  ci["contact_time"] = static_cast<double>(r.contact_steps) * r.dt;
   ci["unconverged_steps"] = r.contact_unconverged_steps;
   ci["candidates"] = r.contact_candidates;
   j["contact_iterations"] = ci;
@@ -169,7 +174,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     const std::size_t last = h.rows() - 1;
     for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
                           "external_work", "friction_dissipation", "contact_work", "total_energy",
-                          "energy_error", "momentum_x", "momentum_y"})
+                          "energy_error", "momentum_x", "momentum_y", "angular_momentum"})
       fin[k] = h.at(last, h.column(k));
     j["final"] = fin;
   }

@@ -137,7 +137,8 @@ ObstacleContact closest_polyline(const Obstacle& ob, const Vec2& x) {
 
 ContactState make_contact_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
-                                const std::vector<PrescribedDof>& prescribed) {
+                                const std::vector<PrescribedDof>& prescribed,
+                                const std::vector<BodyPair>& pairs) {
   ContactState c;
   std::vector<bool> held(model.num_nodes(), false);
   for (const auto& p : prescribed) held[p.dof / 2] = true;
@@ -148,14 +149,30 @@ ContactState make_contact_state(const Model& model, const std::vector<Obstacle>&
           c.candidates.push_back({node, o, friction[b][o]});
           c.any_friction = c.any_friction || friction[b][o] > 0.0;
         }
+  for (int q = 0; q < static_cast<int>(pairs.size()); ++q) {
+    const BodyPair& bp = pairs[q];
+    if (bp.slave == bp.master) throw std::invalid_argument("body pair: self-contact is not treated");
+    c.surfaces.push_back(make_surface(model, bp.master));
+    for (int node : model.bodies[bp.slave].boundary_nodes)
+      if (!held[node]) {
+        c.candidates.push_back({node, -1, bp.friction, q});
+        c.any_friction = c.any_friction || bp.friction > 0.0;
+      }
+  }
+  c.boxes.resize(pairs.size());
   const std::size_t n = c.candidates.size();
   c.reaction.assign(n, {});
   c.x_free.assign(n, {});
   c.status.assign(n, ContactStatus::open);
   c.weight.assign(n, 0.0);
-  c.normal.resize(n);
-  for (std::size_t k = 0; k < n; ++k)
-    c.normal[k] = closest(obstacles[c.candidates[k].obstacle], model.ref.col(c.candidates[k].node)).normal;
+  c.normal.assign(n, Vec2::UnitY());
+  c.stencil.resize(n);
+  c.segment.assign(n, -1);
+  for (std::size_t k = 0; k < n; ++k) {
+    const ContactCandidate& cc = c.candidates[k];
+    c.stencil[k].node[0] = cc.node;
+    if (cc.pair < 0) c.normal[k] = closest(obstacles[cc.obstacle], model.ref.col(cc.node)).normal;
+  }
   c.active.reserve(n);
   c.node_reaction.assign(model.num_nodes(), Vec2::Zero());
   return c;
@@ -171,12 +188,18 @@ int gauss_seidel(const ContactSettings& set, ContactState& c) {
     bool converged = true;
     for (int k : c.active) {
       const ContactCandidate& cc = c.candidates[k];
+      const Stencil& st = c.stencil[k];
       const Vec2 n = c.normal[k], t{n.y(), -n.x()};
       const double w = c.weight[k];
       LocalPair& r = c.reaction[k];
       const Vec2 own = r.n * n + r.t * t;
-      const Vec2 other = c.node_reaction[cc.node] - own;
-      const LocalPair xf{c.x_free[k].n + w * n.dot(other), c.x_free[k].t + w * t.dot(other)};
+      // x = x_free + sum_j coef_j w_j (reactions on node j other than this contact's own).
+      LocalPair xf = c.x_free[k];
+      for (int j = 0; j < st.count; ++j) {
+        const Vec2 other = c.node_reaction[st.node[j]] - st.coef[j] * own;
+        xf.n += st.factor[j] * n.dot(other);
+        xf.t += st.factor[j] * t.dot(other);
+      }
       const double rho = set.rho_factor / w;
       LocalPair next;
       if constexpr (kFriction) {
@@ -186,7 +209,8 @@ int gauss_seidel(const ContactSettings& set, ContactState& c) {
       }
       const double change = std::hypot(next.n - r.n, next.t - r.t);
       if (change > set.tolerance * std::hypot(next.n, next.t)) converged = false;
-      c.node_reaction[cc.node] += (next.n - r.n) * n + (next.t - r.t) * t;
+      const Vec2 delta = (next.n - r.n) * n + (next.t - r.t) * t;
+      for (int j = 0; j < st.count; ++j) c.node_reaction[st.node[j]] += st.coef[j] * delta;
       r = next;
     }
     if (converged) {
@@ -204,28 +228,51 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& set, ContactState& c, State& s) {
   const double dt = s.dt;
   const bool position = set.level == ContactLevel::position;
+  // Free motion to t+dt: v_{n+1/2} without contact and the predicted position.
+  auto v_free = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt * s.a.segment<2>(2 * j); };
+  auto predicted = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j) + dt * v_free(j); };
+  for (std::size_t q = 0; q < c.surfaces.size(); ++q)
+    c.boxes[q] = surface_box(c.surfaces[q], predicted, c.surfaces[q].max_length);
   c.active.clear();
-  // Broad phase: only boundary nodes whose free motion ends behind an obstacle at t+dt.
+  // Broad phase: only boundary nodes whose free motion ends behind an obstacle (or inside a
+  // master body) at t+dt.
   for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
     const ContactCandidate& cc = c.candidates[k];
     const int i = cc.node;
-    const Vec2 v_free = s.v_half.segment<2>(2 * i) + dt * s.a.segment<2>(2 * i);
-    const Vec2 x_next = model.ref.col(i) + s.u.segment<2>(2 * i) + dt * v_free;
+    Stencil& st = c.stencil[k];
     // Gap and frame at the predicted position, frozen for the step.
-    const ObstacleContact oc = closest(obstacles[cc.obstacle], x_next);
-    const double gap = oc.gap;
-    if (!(gap < 0.0)) {
+    ObstacleContact oc;
+    if (cc.pair < 0) {
+      oc = closest(obstacles[cc.obstacle], predicted(i));
+    } else {
+      NodeSegment ns;
+      if (!pair_contact_geometry(model, c, k, s.u, s.v_half, predicted, ns)) {
+        c.reaction[k] = {};
+        c.status[k] = ContactStatus::open;
+        continue;
+      }
+      oc = {ns.gap, ns.normal};
+    }
+    if (!(oc.gap < 0.0)) {
       c.reaction[k] = {};
       c.status[k] = ContactStatus::open;
       continue;
     }
-    const double m = model.mass[2 * i];
     c.normal[k] = oc.normal;
     const Vec2 t = oc.tangent();
-    c.x_free[k] = position ? LocalPair{gap, dt * t.dot(v_free)}
-                           : LocalPair{oc.normal.dot(v_free), t.dot(v_free)};
-    c.weight[k] = position ? dt * dt / m : dt / m;
-    c.node_reaction[i].setZero();
+    // Relative free velocity and compliance of the stencil: w = sum_j coef_j^2 w_j.
+    Vec2 v_rel = Vec2::Zero();
+    double w = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      v_rel += st.coef[j] * v_free(node);
+      const double wj = position ? dt * dt / model.mass[2 * node] : dt / model.mass[2 * node];
+      st.factor[j] = st.coef[j] * wj;
+      w += st.coef[j] * st.factor[j];
+      c.node_reaction[node].setZero();
+    }
+    c.x_free[k] = position ? LocalPair{oc.gap, dt * t.dot(v_rel)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    c.weight[k] = w;
     c.active.push_back(k);
   }
   c.active_count = static_cast<int>(c.active.size());
@@ -238,7 +285,9 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // Warm start from the last step's reactions.
   for (int k : c.active) {
     const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-    c.node_reaction[c.candidates[k].node] += c.reaction[k].n * n + c.reaction[k].t * t;
+    const Stencil& st = c.stencil[k];
+    const Vec2 r = c.reaction[k].n * n + c.reaction[k].t * t;
+    for (int j = 0; j < st.count; ++j) c.node_reaction[st.node[j]] += st.coef[j] * r;
   }
   c.sweeps = c.any_friction ? gauss_seidel<true>(set, c) : gauss_seidel<false>(set, c);
   ++c.steps_with_contact;
@@ -249,10 +298,11 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
   for (int k : c.active) {
     const ContactCandidate& cc = c.candidates[k];
+    const Stencil& st = c.stencil[k];
     const Vec2 n = c.normal[k], t{n.y(), -n.x()};
     const LocalPair r = c.reaction[k];
     const Vec2 force = r.n * n + r.t * t;
-    s.a.segment<2>(2 * cc.node) += force / model.mass[2 * cc.node];
+    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force / model.mass[2 * st.node[j]];
     c.normal_force += r.n;
     c.tangential_force += r.t;
     c.status[k] = classify(r, cc.friction_coeff);
@@ -263,24 +313,43 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // dt t.v_{n+1/2} of the step (>= 0 by the cone). Contact work: dt R.v_n with
   // v_n = v_{n-1/2} + dt/2 a_n, exactly the change of the half-step kinetic energy
   // 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2 that R causes (a node stopped dead loses 1/2 m v^2).
+  // Between bodies both are sums over the stencil (relative slip; work on all three nodes).
   for (int k : c.active) {
-    const ContactCandidate& cc = c.candidates[k];
+    const Stencil& st = c.stencil[k];
     const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-    const Vec2 a = s.a.segment<2>(2 * cc.node);
-    const Vec2 v_next = s.v_half.segment<2>(2 * cc.node) + dt * a;
-    const Vec2 v_mid = s.v_half.segment<2>(2 * cc.node) + 0.5 * dt * a;
     const LocalPair r = c.reaction[k];
+    const Vec2 force = r.n * n + r.t * t;
+    Vec2 v_next = Vec2::Zero();
+    double work = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      const Vec2 a = s.a.segment<2>(2 * node);
+      v_next += st.coef[j] * (s.v_half.segment<2>(2 * node) + dt * a);
+      work += (st.coef[j] * force).dot(s.v_half.segment<2>(2 * node) + 0.5 * dt * a);
+    }
     c.friction_dissipation -= r.t * dt * t.dot(v_next);
-    c.contact_work += dt * (r.n * n + r.t * t).dot(v_mid);
+    c.contact_work += dt * work;
   }
 }
 
 double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
+                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
+                   const Eigen::VectorXd& u) {
   double depth = 0.0;
+  auto position = [&](int j) -> Vec2 { return model.ref.col(j) + u.segment<2>(2 * j); };
+  int boxed = -1;  // a pair's candidates are contiguous: one bounding box per pair
+  Box2 box;
   for (const ContactCandidate& cc : candidates) {
-    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
-    depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
+    const Vec2 x = position(cc.node);
+    if (cc.pair < 0) {
+      depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
+      continue;
+    }
+    if (cc.pair != boxed) {
+      box = surface_box(surfaces.at(cc.pair), position, 0.0);
+      boxed = cc.pair;
+    }
+    if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
   }
   return depth;
 }

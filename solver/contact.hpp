@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/body_contact.hpp"
 #include "solver/central_difference.hpp"
 #include "solver/coulomb.hpp"
 
@@ -106,11 +107,13 @@ struct ContactSettings {
   int max_sweeps = 200;       // Gauss-Seidel sweep cap per step
 };
 
-// One potential contact: a boundary node of a body facing an obstacle.
+// One potential contact: a boundary node of a body facing an obstacle (pair = -1), or a
+// boundary node of a pair's slave body facing its master body's surface (obstacle = -1).
 struct ContactCandidate {
   int node = 0;
   int obstacle = 0;
-  double friction_coeff = 0.0;  // mu of this body-obstacle pair [-]
+  double friction_coeff = 0.0;  // mu of this body-obstacle (or body-body) pair [-]
+  int pair = -1;                // index into the body pairs; -1 for a rigid obstacle
 };
 
 // Preallocated working set and per-step results of the contact phase.
@@ -126,6 +129,12 @@ struct ContactState {
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> node_reaction;  // per node, sum of r in global axes [N]
   bool any_friction = false;
+  // Contact between bodies (body_contact.hpp): per pair the master's surface and, per step, its
+  // bounding box; per candidate the nodes its reaction acts on and the tracked master segment.
+  std::vector<Surface> surfaces;
+  std::vector<Box2> boxes;
+  std::vector<Stencil> stencil;          // per candidate (rigid obstacles: the node alone)
+  std::vector<int> segment;              // per candidate, master segment of the last step (-1 none)
 
   // Results of the last step.
   int active_count = 0, stick_count = 0, slip_count = 0;
@@ -141,19 +150,53 @@ struct ContactState {
   long unconverged_steps = 0;
 };
 
-// Candidates: the boundary nodes of each body paired with each obstacle, less nodes with a
-// prescribed DOF. `friction[b][o]` is mu of body b against obstacle o.
+// Candidates: the boundary nodes of each body paired with each obstacle, then the boundary
+// nodes of each pair's slave body, less nodes with a prescribed DOF. `friction[b][o]` is mu of
+// body b against obstacle o.
 ContactState make_contact_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
-                                const std::vector<PrescribedDof>& prescribed);
+                                const std::vector<PrescribedDof>& prescribed,
+                                const std::vector<BodyPair>& pairs = {});
 
 // After evaluate(): solves the contact reactions of step n -> n+1 and adds them to s.a.
 void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& settings, ContactState& c, State& s);
 
-// Largest depth of any candidate node behind its obstacle at u (>= 0) [m]. Every scheme
-// measures penetration with this, on its own candidate list.
+// Largest depth of any candidate node behind its obstacle, or inside its pair's master body
+// (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this, on its own
+// candidate list; `surfaces` are the pairs' master surfaces (may be empty without pairs).
 double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u);
+                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
+                   const Eigen::VectorXd& u);
+inline double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
+                          const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
+  return penetration(model, obstacles, {}, candidates, u);
+}
+
+// Fills candidate k's stencil, gap, frame and segment for a body pair: the segment choice of
+// body_contact.hpp with the start positions X + u and the evaluation positions eval(j). Returns
+// false (and clears the tracked segment) when the node faces no master segment. `Set` is a
+// ContactState or a PenaltyState (same candidate, surface, box, segment and stencil arrays).
+template <class Set, class Eval>
+bool pair_contact_geometry(const Model& model, Set& c, int k, const Eigen::VectorXd& u,
+                           const Eigen::VectorXd& v, const Eval& eval, NodeSegment& out) {
+  const ContactCandidate& cc = c.candidates[k];
+  const Surface& surf = c.surfaces[cc.pair];
+  if (!c.boxes[cc.pair].contains(eval(cc.node))) {
+    c.segment[k] = -1;
+    return false;
+  }
+  auto start = [&](int j) -> Vec2 { return model.ref.col(j) + u.segment<2>(2 * j); };
+  auto vel = [&](int j) -> Vec2 { return v.segment<2>(2 * j); };
+  out = find_segment(surf, cc.node, c.segment[k], start, eval, vel);
+  c.segment[k] = out.segment;
+  if (out.segment < 0) return false;
+  const SurfaceSegment& sg = surf.segments[out.segment];
+  Stencil& st = c.stencil[k];
+  st.count = 3;
+  st.node = {cc.node, sg.a, sg.b};
+  st.coef = {1.0, -(1.0 - out.xi), -out.xi};
+  return true;
+}
 
 }  // namespace ricochet

@@ -10,7 +10,7 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
                                        const ImplicitSettings& settings)
     : model_(model), run_(run), set_(settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement);
-  contact_ = make_contact_state(model, run.obstacles, run.friction, run.prescribed);
+  contact_ = make_contact_state(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
   system_ = make_system_matrix(model);
   const int n = model.num_dofs();
   pcg_.resize(n);
@@ -133,13 +133,27 @@ bool ImplicitIntegrator::solve_contact() {
   const double c = position ? dt * th : 1.0;  // x = x_free + c H y
   ContactState& cs = contact_;
   cs.active.clear();
+  auto u_pred = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) + dt * th * dv_free_.segment<2>(2 * j); };
+  auto x_pred = [&](int j) -> Vec2 { return model_.ref.col(j) + u_pred(j); };
+  for (std::size_t q = 0; q < cs.surfaces.size(); ++q)
+    cs.boxes[q] = surface_box(cs.surfaces[q], x_pred, cs.surfaces[q].max_length);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
     const ContactCandidate& cc = cs.candidates[k];
-    const int i = cc.node;
-    const Vec2 u_pred = u1_.segment<2>(2 * i) + dt * th * dv_free_.segment<2>(2 * i);
+    Stencil& st = cs.stencil[k];
     // Gap and frame at the predicted position (see closest() in contact.hpp); the reactions of
-    // this iterate act along this frame.
-    const ObstacleContact oc = closest(run_.obstacles[cc.obstacle], Vec2(model_.ref.col(i) + u_pred));
+    // this iterate act along this frame. Between bodies the segment is chosen from the start of
+    // the step (u0, v0).
+    ObstacleContact oc;
+    if (cc.pair < 0) {
+      oc = closest(run_.obstacles[cc.obstacle], x_pred(cc.node));
+    } else {
+      NodeSegment ns;
+      if (!pair_contact_geometry(model_, cs, k, u0_, v0_, x_pred, ns)) {
+        cs.reaction[k] = {};
+        continue;
+      }
+      oc = {ns.gap, ns.normal};
+    }
     const double gap = oc.gap;
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
     // engaged contact that separates simply gets R = 0 from the contact law.
@@ -148,13 +162,19 @@ bool ImplicitIntegrator::solve_contact() {
       cs.reaction[k] = {};
       continue;
     }
-    const Vec2 v_pred = v1_.segment<2>(2 * i) + dv_free_.segment<2>(2 * i);
     cs.normal[k] = oc.normal;
     const Vec2 t = oc.tangent();
-    cs.x_free[k] = position ? LocalPair{gap, t.dot(u_pred - u0_.segment<2>(2 * i))}
-                            : LocalPair{oc.normal.dot(v_pred), t.dot(v_pred)};
-    const double a_ii = 0.5 / inv_diag_[2 * i] + 0.5 / inv_diag_[2 * i + 1];
-    cs.weight[k] = c * dt / a_ii;  // local compliance estimate: exact when A is diagonal
+    Vec2 du = Vec2::Zero(), v_rel = Vec2::Zero();
+    double compliance = 0.0;  // sum_j coef_j^2 / a_jj: exact when A is diagonal
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      du += st.coef[j] * (u_pred(node) - u0_.segment<2>(2 * node));
+      v_rel += st.coef[j] * (v1_.segment<2>(2 * node) + dv_free_.segment<2>(2 * node));
+      const double a_jj = 0.5 / inv_diag_[2 * node] + 0.5 / inv_diag_[2 * node + 1];
+      compliance += st.coef[j] * st.coef[j] / a_jj;
+    }
+    cs.x_free[k] = position ? LocalPair{gap, t.dot(du)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    cs.weight[k] = c * dt * compliance;
     cs.active.push_back(k);
   }
   if (cs.active.empty()) {
@@ -177,7 +197,10 @@ bool ImplicitIntegrator::engage_penetrating() {
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
     if (engaged_[k]) continue;
     const ContactCandidate& cc = contact_.candidates[k];
-    if (closest(run_.obstacles[cc.obstacle], Vec2(model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node))).gap < 0.0) {
+    const Vec2 x = model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node);
+    const bool inside = cc.pair < 0 ? closest(run_.obstacles[cc.obstacle], x).gap < 0.0
+                                    : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
+    if (inside) {
       engaged_[k] = 1;
       any = true;
     }
@@ -185,12 +208,26 @@ bool ImplicitIntegrator::engage_penetrating() {
   return any;
 }
 
+// The reactions of the active contacts as nodal forces (the stencil of each contact).
 void ImplicitIntegrator::build_impulse() {
   impulse_.setZero();
-  for (int k : contact_.active) {
-    const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
-    impulse_.segment<2>(2 * contact_.candidates[k].node) += contact_.reaction[k].n * n + contact_.reaction[k].t * t;
-  }
+  for (int k : contact_.active) add_reaction(k);
+}
+
+void ImplicitIntegrator::add_reaction(int k) {
+  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+  const Vec2 r = contact_.reaction[k].n * n + contact_.reaction[k].t * t;
+  const Stencil& st = contact_.stencil[k];
+  for (int j = 0; j < st.count; ++j) impulse_.segment<2>(2 * st.node[j]) += st.coef[j] * r;
+}
+
+// (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
+LocalPair ImplicitIntegrator::stencil_dot(int k, const Eigen::VectorXd& y) const {
+  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+  const Stencil& st = contact_.stencil[k];
+  Vec2 sum = Vec2::Zero();
+  for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.segment<2>(2 * st.node[j]);
+  return {n.dot(sum), t.dot(sum)};
 }
 
 // Uzawa sweeps: x(R) exact through one solve of A per sweep, rho = omega / w with w the
@@ -207,9 +244,8 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
     double change = 0.0, size = 0.0;
     for (int k : cs.active) {
       const ContactCandidate& cc = cs.candidates[k];
-      const Vec2 n = cs.normal[k], t{n.y(), -n.x()};
-      const Vec2 yi = y_.segment<2>(2 * cc.node);
-      const LocalPair x{cs.x_free[k].n + c * n.dot(yi), cs.x_free[k].t + c * t.dot(yi)};
+      const LocalPair hy = stencil_dot(k, y_);
+      const LocalPair x{cs.x_free[k].n + c * hy.n, cs.x_free[k].t + c * hy.t};
       const double rho = omega / cs.weight[k];
       LocalPair& r = cs.reaction[k];
       const LocalPair next = project_coulomb(
@@ -245,14 +281,20 @@ bool ImplicitIntegrator::exact_contact(double c) {
   };
   for (int a = 0; a < m; ++a) {
     rhs_.setZero();
-    rhs_.segment<2>(2 * cs.candidates[cs.active[a / dirs]].node) = direction(a);
+    const Stencil& st = cs.stencil[cs.active[a / dirs]];
+    for (int j = 0; j < st.count; ++j) rhs_.segment<2>(2 * st.node[j]) += st.coef[j] * direction(a);
     y_.setZero();
     if (!solve(rhs_, y_)) return false;
     columns_.col(a) = y_;
   }
-  for (int a = 0; a < m; ++a)
-    for (int b = 0; b < m; ++b)
-      w_(a, b) = c * dt * direction(a).dot(columns_.col(b).segment<2>(2 * cs.candidates[cs.active[a / dirs]].node));
+  for (int a = 0; a < m; ++a) {
+    const Stencil& st = cs.stencil[cs.active[a / dirs]];
+    for (int b = 0; b < m; ++b) {
+      double h = 0.0;
+      for (int j = 0; j < st.count; ++j) h += st.coef[j] * direction(a).dot(columns_.col(b).segment<2>(2 * st.node[j]));
+      w_(a, b) = c * dt * h;
+    }
+  }
 
   const double tol = run_.contact.tolerance;
   for (cs.sweeps = 1; cs.sweeps <= run_.contact.max_sweeps; ++cs.sweeps) {
@@ -320,11 +362,8 @@ bool ImplicitIntegrator::step(bool with_energy) {
                      ? p.value
                      : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
   impulse_.setZero();
-  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
-    // The last step's reactions in the frame they were solved in.
-    const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
-    impulse_.segment<2>(2 * contact_.candidates[k].node) += contact_.reaction[k].n * n + contact_.reaction[k].t * t;
-  }
+  // The last step's reactions in the frame (and on the stencil) they were solved in.
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) add_reaction(static_cast<int>(k));
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
   int sweeps = 0;
@@ -398,8 +437,15 @@ bool ImplicitIntegrator::step(bool with_energy) {
     }
     const ContactCandidate& cc = cs.candidates[k];
     const Vec2 n = cs.normal[k], t{n.y(), -n.x()};
-    const Vec2 du = u1_.segment<2>(2 * cc.node) - u0_.segment<2>(2 * cc.node);
-    cs.contact_work += (r.n * n + r.t * t).dot(du);
+    const Stencil& st = cs.stencil[k];
+    Vec2 du = Vec2::Zero();  // relative displacement of the stencil
+    double work = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const Vec2 du_j = u1_.segment<2>(2 * st.node[j]) - u0_.segment<2>(2 * st.node[j]);
+      du += st.coef[j] * du_j;
+      work += (st.coef[j] * (r.n * n + r.t * t)).dot(du_j);
+    }
+    cs.contact_work += work;
     cs.friction_dissipation -= r.t * t.dot(du);
     cs.status[k] = classify(r, cc.friction_coeff);
     ++cs.active_count;
@@ -430,7 +476,8 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   const State& s = integrator.state();
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
   const bool with_contact = !integrator.contact().candidates.empty();
-  RunMonitor monitor(model, settings, result, with_contact ? &integrator.contact().candidates : nullptr);
+  RunMonitor monitor(model, settings, result, with_contact ? &integrator.contact().candidates : nullptr,
+                     &integrator.contact().surfaces);
   const long planned = monitor.planned_steps();
   for (;;) {
     const long n = s.step;

@@ -71,6 +71,8 @@ class ImplicitIntegrator {
   bool factorize();
   void use_direct();
   void build_impulse();
+  void add_reaction(int k);                                  // candidate k's reaction into impulse_
+  LocalPair stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
   bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
   void constrain_matrix();
 

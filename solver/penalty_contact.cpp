@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
@@ -51,7 +52,9 @@ void collect_edges(const Model& model, const std::vector<Block>& blocks, int bod
 }
 
 // Per node of the model: k_i / f_si = sum over its boundary segments of K l^2 e / (2 A_c).
-std::vector<double> nodal_stiffness_per_scale(const Model& model) {
+// With `segments`, also every boundary segment's k_s / f_si, keyed by its (min, max) node pair.
+std::vector<double> nodal_stiffness_per_scale(const Model& model,
+                                              std::map<std::pair<int, int>, double>* segments = nullptr) {
   std::vector<double> k(model.num_nodes(), 0.0);
   std::vector<Edge> edges;
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
@@ -72,6 +75,7 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
         const double ks = bulk * l2 * body.thickness / e.cell_area;
         k[e.a] += 0.5 * ks;
         k[e.b] += 0.5 * ks;
+        if (segments) (*segments)[{e.a, e.b}] = ks;
       }
       i = j;
     }
@@ -84,23 +88,46 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
 PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed,
-                                const PenaltySettings& settings) {
+                                const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
   if (!(settings.scale_factor > 0.0))
     throw std::invalid_argument("penalty contact: scale factor f_si must be > 0");
   // The candidates, exactly as the bi-potential phase chooses them.
-  const ContactState c = make_contact_state(model, obstacles, friction, prescribed);
+  ContactState c = make_contact_state(model, obstacles, friction, prescribed, pairs);
   PenaltyState p;
   p.candidates = c.candidates;
   p.any_friction = c.any_friction;
   p.scale_factor = settings.scale_factor;
-  const std::vector<double> k_node = nodal_stiffness_per_scale(model);
+  p.surfaces = std::move(c.surfaces);
+  p.boxes = std::move(c.boxes);
+  p.stencil = std::move(c.stencil);
+  p.segment = std::move(c.segment);
+  std::map<std::pair<int, int>, double> k_edge;
+  const std::vector<double> k_node = nodal_stiffness_per_scale(model, &k_edge);
+  // Per pair and master segment, k_s; per pair the smallest master boundary node mass.
+  p.segment_stiffness.resize(p.surfaces.size());
+  std::vector<double> m_master(p.surfaces.size()), k_max(p.surfaces.size(), 0.0);
+  for (std::size_t q = 0; q < p.surfaces.size(); ++q) {
+    for (const SurfaceSegment& sg : p.surfaces[q].segments) {
+      const double ks = k_edge.at({std::min(sg.a, sg.b), std::max(sg.a, sg.b)});
+      p.segment_stiffness[q].push_back(settings.scale_factor * ks);
+      k_max[q] = std::max(k_max[q], ks);
+    }
+    m_master[q] = std::numeric_limits<double>::infinity();
+    for (int j : p.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
+  }
   const std::size_t n = p.candidates.size();
   p.stiffness.resize(n);
+  p.pair_compliance.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    p.stiffness[i] = settings.scale_factor * k_node[p.candidates[i].node];
+    const ContactCandidate& cc = p.candidates[i];
+    double k = k_node[cc.node];
+    if (cc.pair >= 0) {
+      k = std::min(k, k_max[cc.pair]);  // the stiffest spring the node can meet (for the step)
+      p.pair_compliance[i] = 1.0 / model.mass[2 * cc.node] + 1.0 / m_master[cc.pair];
+    }
+    p.stiffness[i] = settings.scale_factor * k;
     if (!(p.stiffness[i] > 0.0))
-      throw std::logic_error("penalty contact: boundary node " +
-                             std::to_string(p.candidates[i].node) + " has no boundary segment");
+      throw std::logic_error("penalty contact: boundary node " + std::to_string(cc.node) + " has no boundary segment");
   }
   p.force_n.assign(n, 0.0);
   p.force_t.assign(n, 0.0);
@@ -114,7 +141,9 @@ PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>&
 double penalty_critical_dt(const Model& model, const PenaltyState& p) {
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.candidates.size(); ++i)
-    dt = std::min(dt, 2.0 * std::sqrt(model.mass[2 * p.candidates[i].node] / p.stiffness[i]));
+    dt = std::min(dt, p.candidates[i].pair < 0
+                          ? 2.0 * std::sqrt(model.mass[2 * p.candidates[i].node] / p.stiffness[i])
+                          : 2.0 / std::sqrt(p.stiffness[i] * p.pair_compliance[i]));
   return dt;
 }
 
@@ -139,15 +168,34 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   const bool first = !p.initialized;
   p.initialized = true;
 
+  auto position = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j); };
+  for (std::size_t q = 0; q < p.surfaces.size(); ++q)
+    p.boxes[q] = surface_box(p.surfaces[q], position, p.surfaces[q].max_length);
+
   for (int k = 0; k < count; ++k) {
     const ContactCandidate& cc = p.candidates[k];
     const int i = cc.node;
-    const Vec2 x = model.ref.col(i) + s.u.segment<2>(2 * i);
-    const ObstacleContact oc = closest(obstacles[cc.obstacle], x);
+    const Vec2 x = position(i);
+    Stencil& st = p.stencil[k];
+    ObstacleContact oc;
+    if (cc.pair < 0) {
+      oc = closest(obstacles[cc.obstacle], x);
+    } else {
+      NodeSegment ns;
+      if (pair_contact_geometry(model, p, k, s.u, s.v_half, position, ns)) {  // at t_n: start = evaluation
+        oc = {ns.gap, ns.normal};
+      } else {
+        oc.gap = std::numeric_limits<double>::infinity();  // facing no segment: open
+        st.count = 1;
+      }
+    }
     const double g = oc.gap;
     const Vec2 t = oc.tangent();
     p.normal[k] = oc.normal;
-    const double stiff = p.stiffness[k];
+    // Between bodies: f_si min(k_slave, k_s) of the segment met this step.
+    const double stiff = cc.pair < 0 || p.segment[k] < 0
+                             ? p.stiffness[k]
+                             : std::min(p.stiffness[k], p.segment_stiffness[cc.pair][p.segment[k]]);
     const double fn = g < 0.0 ? -stiff * g : 0.0;
     double ft = 0.0;
     ContactStatus status = fn > 0.0 ? ContactStatus::slip : ContactStatus::open;
@@ -156,7 +204,15 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
       // |f_t| <= mu f_n (f_n = 0 when open, which returns the spring to zero).
       // For a line t . x_{n-1} is the value stored last step, bit for bit; for a curved
       // obstacle it projects the increment on the current tangent.
-      const double ds = first ? 0.0 : t.dot(x) - t.dot(p.last_position[k]);
+      // Between bodies the increment is the relative one, dt t . sum_j coef_j v_{n-1/2,j}.
+      double ds = 0.0;
+      if (!first && cc.pair < 0) {
+        ds = t.dot(x) - t.dot(p.last_position[k]);
+      } else if (!first) {
+        Vec2 dv = Vec2::Zero();
+        for (int j = 0; j < st.count; ++j) dv += st.coef[j] * s.v_half.segment<2>(2 * st.node[j]);
+        ds = s.dt * t.dot(dv);
+      }
       p.last_position[k] = x;
       const double old = p.force_t[k];
       const double trial = old - stiff * ds;
@@ -176,7 +232,8 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
 
     depth = std::max(depth, -g);
     p.active.push_back(k);
-    s.a.segment<2>(2 * i) += (fn * oc.normal + ft * t) * model.inv_mass[2 * i];
+    const Vec2 force = fn * oc.normal + ft * t;
+    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force * model.inv_mass[2 * st.node[j]];
     p.normal_force += fn;
     p.tangential_force += ft;
     p.normal_energy += 0.5 * stiff * g * g;
@@ -195,11 +252,16 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // the change of the half-step kinetic energy that F causes (as contact_phase records it).
   const double dt = s.dt;
   for (int k : p.active) {
-    const ContactCandidate& cc = p.candidates[k];
+    const Stencil& st = p.stencil[k];
     const Vec2 n = p.normal[k], t{n.y(), -n.x()};
-    const int i = cc.node;
-    const Vec2 v_mid = s.v_half.segment<2>(2 * i) + 0.5 * dt * s.a.segment<2>(2 * i);
-    p.contact_work += dt * (p.force_n[k] * n + p.force_t[k] * t).dot(v_mid);
+    const Vec2 force = p.force_n[k] * n + p.force_t[k] * t;
+    double work = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      const Vec2 v_mid = s.v_half.segment<2>(2 * node) + 0.5 * dt * s.a.segment<2>(2 * node);
+      work += (st.coef[j] * force).dot(v_mid);
+    }
+    p.contact_work += dt * work;
   }
 }
 

@@ -65,6 +65,15 @@ struct PenaltyState {
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;  // per candidate, n of closest() at u_n (this step's frame)
   std::vector<ContactStatus> status;         // per candidate, of the last step
   std::vector<int> active;                   // candidate indices active in the last step
+  // Contact between bodies (as in ContactState): master surfaces and boxes per pair; per
+  // candidate the stencil and tracked segment; `compliance` = 1/m_slave + 1/m_master,min for a
+  // pair candidate (the spring between the slave node and the lightest master node).
+  std::vector<Surface> surfaces;
+  std::vector<Box2> boxes;
+  std::vector<Stencil> stencil;
+  std::vector<int> segment;
+  std::vector<double> pair_compliance;       // per candidate, 0 for rigid obstacles [1/kg]
+  std::vector<std::vector<double>> segment_stiffness;  // per pair and master segment, f_si k_s [N/m]
   double scale_factor = 0.1;                 // f_si used for `stiffness` [-]
   bool any_friction = false;
   bool initialized = false;                  // last_position holds the previous step's positions
@@ -90,13 +99,20 @@ double penalty_bulk_modulus(const Material& material);
 // Candidates as make_contact_state() builds them (each body's boundary nodes with each
 // obstacle, less nodes with a prescribed DOF; friction[b][o] = mu of body b against obstacle
 // o), with their stiffness k_i from `settings`, and every working array allocated.
+// Body pairs (body_contact.hpp): the slave node's spring is k = f_si min(k_i, k_s), k_i the
+// slave node's stiffness and k_s that of the master segment it meets this step (LS-DYNA's
+// default PENO = 1: the minimum of the slave node's and the master segment's stiffness); the
+// force -k g n acts on the slave node and, with weights -(1 - xi) and -xi, on the segment's
+// nodes. `stiffness` holds f_si min(k_i, largest k_s of the master), which sets the step.
 PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
                                 const std::vector<std::vector<double>>& friction,
                                 const std::vector<PrescribedDof>& prescribed,
-                                const PenaltySettings& settings);
+                                const PenaltySettings& settings,
+                                const std::vector<BodyPair>& pairs = {});
 
 // Largest stable step of the contact springs alone: min over candidates of 2 sqrt(m_i / k_i)
-// (a node mass on a spring to the ground), +infinity without candidates [s].
+// (a node mass on a spring to the ground; between bodies 2 / sqrt(k (1/m_s + 1/m_master,min)),
+// two masses on a spring), +infinity without candidates [s].
 double penalty_critical_dt(const Model& model, const PenaltyState& p);
 
 // Critical step of the elements and the springs together [s]:

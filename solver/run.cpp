@@ -14,7 +14,7 @@ std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
                                 "momentum_y",    "von_mises_max",   "penetration_max",
                                 "contact_nodes", "normal_force",    "tangential_force",
                                 "contact_work",  "contact_stick",   "contact_slip",
-                                "contact_iterations", "contact_energy"};
+                                "contact_iterations", "contact_energy", "angular_momentum"};
   for (const auto& p : probes)
     for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
   return c;
@@ -52,12 +52,14 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   ContactState contact;
   PenaltyState springs;
   if (penalty)
-    springs = make_penalty_state(model, settings.obstacles, settings.friction, settings.prescribed, settings.penalty);
+    springs = make_penalty_state(model, settings.obstacles, settings.friction, settings.prescribed, settings.penalty,
+                                 settings.body_pairs);
   else
-    contact = make_contact_state(model, settings.obstacles, settings.friction, settings.prescribed);
+    contact = make_contact_state(model, settings.obstacles, settings.friction, settings.prescribed, settings.body_pairs);
   const std::vector<ContactCandidate>& candidates = penalty ? springs.candidates : contact.candidates;
   const bool with_contact = !candidates.empty();
-  RunMonitor monitor(model, settings, result, with_contact ? &candidates : nullptr);
+  const std::vector<Surface>& surfaces = penalty ? springs.surfaces : contact.surfaces;
+  RunMonitor monitor(model, settings, result, with_contact ? &candidates : nullptr, &surfaces);
   const long planned = monitor.planned_steps();
 
   for (;;) {

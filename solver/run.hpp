@@ -33,6 +33,8 @@ struct RunSettings {
   enum class ContactMethod { bipotential, penalty };
   std::vector<Obstacle> obstacles;
   std::vector<std::vector<double>> friction;
+  // Contact between bodies, node to segment (body_contact.hpp), treated by the same method.
+  std::vector<BodyPair> body_pairs;
   ContactMethod contact_method = ContactMethod::bipotential;
   ContactSettings contact;
   PenaltySettings penalty;

@@ -8,6 +8,10 @@
 
 namespace ricochet {
 
+namespace {
+const std::vector<Surface> kNoSurfaces;
+}  // namespace
+
 ContactReport report(const ContactState& c) {
   ContactReport r;
   r.active = c.active_count;
@@ -52,11 +56,36 @@ std::vector<long> sample_steps(const RunSettings& s, long planned) {
   return steps;
 }
 
+// z angular momentum of all nodes about their common centre of mass at t_n [kg m^2/s]:
+// L = sum m_i (x_i - x_c) x (v_i - v_c), x = X + u, v = v_n. Taken about the current centre of
+// mass so that it is the spin alone (no orbital part from the translation), and computed in
+// two passes (centre first) rather than as sum m x x v - M x_c x v_c, which would cancel
+// digits for a body far from the origin. O(nodes), run at sample steps only.
+double angular_momentum(const Model& model, const State& s) {
+  double mass = 0.0;
+  Vec2 mx = Vec2::Zero(), mv = Vec2::Zero();
+  for (int i = 0; i < model.num_nodes(); ++i) {
+    const double m = model.mass[2 * i];
+    mass += m;
+    mx += m * (model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]));
+    mv += m * Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1));
+  }
+  if (!(mass > 0.0)) return 0.0;
+  const Vec2 xc = mx / mass, vc = mv / mass;
+  double L = 0.0;
+  for (int i = 0; i < model.num_nodes(); ++i) {
+    const Vec2 r = model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]) - xc;
+    const Vec2 w = Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1)) - vc;
+    L += model.mass[2 * i] * (r.x() * w.y() - r.y() * w.x());
+  }
+  return L;
+}
+
 }  // namespace
 
 RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
-                       const std::vector<ContactCandidate>* candidates)
-    : model_(model), settings_(settings), result_(result), candidates_(candidates) {
+                       const std::vector<ContactCandidate>* candidates, const std::vector<Surface>* surfaces)
+    : model_(model), settings_(settings), result_(result), candidates_(candidates), surfaces_(surfaces) {
   if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
     throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
   result.dt = settings.dt;
@@ -121,14 +150,15 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
   if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
     cell_von_mises(model_, s.u.data(), cell_vm_.data());
     const double vm = cell_vm_.empty() ? 0.0 : *std::max_element(cell_vm_.begin(), cell_vm_.end());
-    const double depth = candidates_ ? penetration(model_, settings_.obstacles, *candidates_, s.u) : 0.0;
+    const double depth = candidates_ ? penetration(model_, settings_.obstacles, surfaces_ ? *surfaces_ : kNoSurfaces, *candidates_, s.u) : 0.0;
     const Vec2 p = linear_momentum(model_, s);
     auto& v = result_.history.values;
     v.insert(v.end(), {s.time, e.kinetic, e.strain, e.hourglass, e.external_work,
                        e.friction_dissipation, e.total(), error, p.x(), p.y(), vm, depth,
                        static_cast<double>(c.active), c.normal_force, c.tangential_force,
                        c.contact_work, static_cast<double>(c.stick), static_cast<double>(c.slip),
-                       static_cast<double>(c.iterations), c.contact_energy});
+                       static_cast<double>(c.iterations), c.contact_energy,
+                       angular_momentum(model_, s)});
     for (const auto& pr : settings_.probes) {
       const int d = 2 * pr.node;
       v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});

@@ -25,9 +25,10 @@ ContactReport report(const PenaltyState& p);
 
 class RunMonitor {
  public:
-  // `candidates` are the node-obstacle pairs whose penetration is measured (may be empty).
+  // `candidates` are the node-obstacle pairs whose penetration is measured (may be empty), and
+  // `surfaces` the master surfaces of the body pairs among them.
   RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
-             const std::vector<ContactCandidate>* candidates);
+             const std::vector<ContactCandidate>* candidates, const std::vector<Surface>* surfaces = nullptr);
 
   long planned_steps() const { return planned_; }
   bool is_monitor_step(long n) const;
@@ -47,6 +48,7 @@ class RunMonitor {
   const RunSettings& settings_;
   RunResult& result_;
   const std::vector<ContactCandidate>* candidates_;
+  const std::vector<Surface>* surfaces_;  // master surfaces of the body pairs (may be null)
   long planned_ = 0;
   std::vector<long> samples_, field_steps_;
   std::size_t next_sample_ = 0, next_field_ = 0;

@@ -1,15 +1,19 @@
 // Tests of the structured mesh generators (harness/mesh_generators.hpp): counts, exact areas
-// and their convergence, orientation, node sets, grading, and rejected parameters.
+// and their convergence, orientation, cell quality, node sets, grading, and rejected
+// parameters.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "harness/input_error.hpp"
 #include "harness/mesh_generators.hpp"
+#include "solver/model.hpp"
 
 namespace ricochet {
 namespace {
@@ -235,6 +239,175 @@ TEST(ArcPlate, RejectsBadParameters) {
               make_arc_plate({.height = 0.001, .height_is_overall = true});
             }).find("arc_plate: height must be > the arc's sagitta"),
             std::string::npos);
+}
+
+// ---- disk ----
+
+// Nodes (n+1)^2 + 4 n nr and cells n^2 + 4 n nr of the O-grid, nr = ceil(n/2).
+int disk_rings(int n) { return (n + 1) / 2; }
+
+// Smallest and largest interior angle over the cells [degrees].
+std::pair<double, double> angle_range(const Mesh& m) {
+  double lo = 180.0, hi = 0.0;
+  for (const auto& q : m.quads) {
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 p = m.nodes.col(q[k]);
+      const Vec2 e1 = m.nodes.col(q[(k + 1) % 4]) - p, e2 = m.nodes.col(q[(k + 3) % 4]) - p;
+      const double deg = std::atan2(e1.x() * e2.y() - e1.y() * e2.x(), e1.dot(e2)) * 180.0 / M_PI;
+      lo = std::min(lo, deg);
+      hi = std::max(hi, deg);
+    }
+  }
+  return {lo, hi};
+}
+
+TEST(Disk, CountsAndNodeSets) {
+  const Vec2 c(0.3, -0.1);
+  const double radius = 0.05;
+  for (int n : {1, 2, 3, 4, 5, 8, 13}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Mesh m = make_disk({.radius = radius, .center = c, .n = n});
+    const int nr = disk_rings(n);
+    EXPECT_EQ(m.num_nodes(), (n + 1) * (n + 1) + 4 * n * nr);
+    EXPECT_EQ(m.quads.size(), static_cast<std::size_t>(n * n + 4 * n * nr));
+    EXPECT_TRUE(m.tris.empty());
+    expect_sets_sorted_unique(m);
+    const auto& sets = m.node_sets;
+    EXPECT_EQ(sets.at("all").size(), static_cast<std::size_t>(m.num_nodes()));
+    // `boundary` is the rim, and the rim is exactly the topological boundary (the nodes on an
+    // edge used by one cell: the contact candidates of every scheme).
+    EXPECT_EQ(sets.at("boundary").size(), static_cast<std::size_t>(4 * n));
+    EXPECT_EQ(sets.at("boundary"), boundary_nodes(m));
+    // Every node belongs to a cell.
+    std::vector<int> used(static_cast<std::size_t>(m.num_nodes()), 0);
+    for (const auto& q : m.quads)
+      for (int k : q) ++used[static_cast<std::size_t>(k)];
+    EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
+
+    // Extreme rim nodes: exactly at the extreme point for even n, else the two nodes around it,
+    // mirror images of each other.
+    const struct {
+      const char* name;
+      Vec2 dir;
+    } extremes[] = {{"rightmost", Vec2(1, 0)}, {"highest", Vec2(0, 1)}, {"leftmost", Vec2(-1, 0)},
+                    {"lowest", Vec2(0, -1)}};
+    for (const auto& e : extremes) {
+      const std::vector<int>& set = sets.at(e.name);
+      ASSERT_EQ(set.size(), n % 2 == 0 ? 1u : 2u) << e.name;
+      double best = -1e300;
+      for (int k : sets.at("boundary")) best = std::max(best, e.dir.dot(m.nodes.col(k) - c));
+      for (int k : set) EXPECT_NEAR(e.dir.dot(m.nodes.col(k) - c), best, 1e-15) << e.name;
+      if (n % 2 == 0) {
+        EXPECT_NEAR((m.nodes.col(set[0]) - (c + radius * e.dir)).norm(), 0.0, 1e-15) << e.name;
+      } else {
+        const Vec2 mid = 0.5 * (m.nodes.col(set[0]) + m.nodes.col(set[1])) - c;
+        EXPECT_NEAR(mid.normalized().dot(e.dir), 1.0, 1e-15) << e.name;
+      }
+    }
+    if (n % 2 == 0) {
+      ASSERT_EQ(sets.at("center").size(), 1u);
+      EXPECT_EQ(m.nodes.col(sets.at("center")[0]), c);
+    } else {
+      EXPECT_FALSE(sets.count("center"));
+    }
+  }
+}
+
+TEST(Disk, RimOnTheCircleAndCellsWellShaped) {
+  // Every rim node is at distance R from the centre (to round-off), and every cell is
+  // counter-clockwise and convex. Quality (smallest corner Jacobian / mean, and the angles),
+  // measured: n = 1 is a square block with four trapezoids (45-135 degrees, quality 0.72);
+  // n = 2 has quality 0.52 and angles 67.5-127.9; from n = 3 on, quality >= 0.659 rising to
+  // 0.94 at n = 32, angles within 61.1-125.5 degrees. Bounds a little outside those values.
+  const double radius = 2.5;
+  const Vec2 c(-1.0, 4.0);
+  for (int n : {1, 2, 3, 4, 5, 6, 8, 11, 16, 32}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Mesh m = make_disk({.radius = radius, .center = c, .n = n});
+    for (int k : m.node_sets.at("boundary"))
+      EXPECT_NEAR((m.nodes.col(k) - c).norm(), radius, 4e-16 * (radius + c.norm())) << k;
+    double quality = 1.0;
+    for (const auto& q : m.quads) quality = std::min(quality, q4_corner_quality(m, q));
+    const auto [lo, hi] = angle_range(m);
+    EXPECT_GE(quality, n >= 3 ? 0.65 : 0.5);
+    EXPECT_GE(lo, n >= 3 ? 60.0 : 44.9);
+    EXPECT_LE(hi, n >= 3 ? 126.0 : 135.1);
+    // Interior nodes are strictly inside.
+    std::vector<bool> rim(static_cast<std::size_t>(m.num_nodes()), false);
+    for (int k : m.node_sets.at("boundary")) rim[static_cast<std::size_t>(k)] = true;
+    for (int k = 0; k < m.num_nodes(); ++k) {
+      if (!rim[static_cast<std::size_t>(k)]) {
+        EXPECT_LT((m.nodes.col(k) - c).norm(), radius * (1 - 1e-3)) << k;
+      }
+    }
+    std::printf("[disk] n %2d: %5d nodes, %5d cells, corner quality >= %.3f, angles %.1f-%.1f deg\n", n,
+                m.num_nodes(), m.num_cells(), quality, lo, hi);
+  }
+}
+
+TEST(Disk, AreaIsTheRimPolygonAndConvergesToPiR2AtSecondOrder) {
+  // The cells tile the polygon of the 4n rim nodes exactly (positive areas summing to its
+  // area 2 n R^2 sin(pi/(2n)): no gap, no overlap). That polygon misses pi R^2 by
+  // pi^3 R^2/(24 n^2) + O(n^-4): second order. Measured order log2(e_n/e_2n): 1.998, 1.9995,
+  // 1.9999 (n = 8 -> 16 -> 32 -> 64).
+  const double radius = 0.03;
+  double error[4];
+  for (int k = 0; k < 4; ++k) {
+    const int n = 8 << k;
+    const Mesh m = make_disk({.radius = radius, .n = n});
+    const double area = checked_area(m);
+    const double polygon = 2.0 * n * radius * radius * std::sin(M_PI / (2.0 * n));
+    EXPECT_NEAR(area, polygon, 1e-14 * polygon);
+    error[k] = M_PI * radius * radius - area;
+    EXPECT_GT(error[k], 0.0);
+    EXPECT_NEAR(error[k], std::pow(M_PI, 3) * radius * radius / (24.0 * n * n), 0.01 * error[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double order = std::log2(error[k] / error[k + 1]);
+    EXPECT_NEAR(order, 2.0, 0.01);
+    std::printf("[disk] area error n %d -> %d: %.3e -> %.3e, order %.4f\n", 8 << k, 16 << k, error[k],
+                error[k + 1], order);
+  }
+}
+
+TEST(Disk, HasTheSymmetriesOfTheSquare) {
+  // Mirror images about both axes and the diagonals, and quarter turns, map the node cloud onto
+  // itself (the generator builds the quarters with exact coordinate swaps), so a symmetric
+  // load gives a symmetric response, e.g. no spin for a frictionless normal impact.
+  for (int n : {4, 5}) {
+    const Mesh m = make_disk({.radius = 1.0, .n = n});
+    std::set<std::pair<double, double>> cloud;
+    const auto key = [](double x, double y) {  // rounded to 1e-13 so that round-off does not split keys
+      return std::make_pair(std::round(x * 1e13) / 1e13 + 0.0, std::round(y * 1e13) / 1e13 + 0.0);
+    };
+    for (int k = 0; k < m.num_nodes(); ++k) cloud.insert(key(m.nodes(0, k), m.nodes(1, k)));
+    EXPECT_EQ(cloud.size(), static_cast<std::size_t>(m.num_nodes()));
+    for (int k = 0; k < m.num_nodes(); ++k) {
+      const double x = m.nodes(0, k), y = m.nodes(1, k);
+      EXPECT_TRUE(cloud.count(key(-x, y))) << k;
+      EXPECT_TRUE(cloud.count(key(x, -y))) << k;
+      EXPECT_TRUE(cloud.count(key(y, x))) << k;
+      EXPECT_TRUE(cloud.count(key(-y, x))) << k;
+    }
+  }
+}
+
+TEST(Disk, RejectsBadParameters) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(error_of([] { make_disk({.radius = 0}); }), "disk: radius must be finite and > 0 (got 0)");
+  EXPECT_EQ(error_of([] { make_disk({.radius = -0.1}); }),
+            "disk: radius must be finite and > 0 (got -0.1)");
+  EXPECT_NE(error_of([&] { make_disk({.radius = nan}); }).find("disk: radius"), std::string::npos);
+  EXPECT_NE(error_of([&] { make_disk({.radius = inf}); }).find("disk: radius"), std::string::npos);
+  EXPECT_EQ(error_of([] { make_disk({.n = 0}); }), "disk: n must be >= 1 (got 0)");
+  EXPECT_EQ(error_of([] { make_disk({.n = -4}); }), "disk: n must be >= 1 (got -4)");
+  EXPECT_NE(error_of([&] { make_disk({.center = Vec2(0, nan)}); }).find("disk: center must be finite"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { make_disk({.center = Vec2(inf, 0)}); }).find("disk: center must be finite"),
+            std::string::npos);
+  EXPECT_EQ(error_of([] { make_disk({.n = 6000}); }),
+            "disk: (n+1)^2 + 4 n ceil(n/2) must be <= 100000000 nodes (got n 6000)");
 }
 
 }  // namespace
