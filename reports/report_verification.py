@@ -62,6 +62,7 @@ class CaseSpec:
     pending: str = ""                           # not yet in the sweep: what is missing
     notes: str = ""                             # appended to the table caption
     aliases: tuple = ()                         # other case names accepted in the sweep
+    groups: tuple = ()                          # only runs of these sweep groups (empty: all)
 
 
 def ref_value(q_ref, table):
@@ -178,6 +179,13 @@ def impulse_ratio(run, table):
     """|Δp_x| / Δp_y over the run (history momentum_x, momentum_y)."""
     dx, dy = change("momentum_x")(run, table), change("momentum_y")(run, table)
     return abs(dx) / dy if dx is not None and dy else None
+
+
+def spin_arm(run, table):
+    """ΔL / Δp_x over the run: the arm of the friction impulse about the centre (history
+    angular_momentum, momentum_x)."""
+    dl, dx = change("angular_momentum")(run, table), change("momentum_x")(run, table)
+    return dl / dx if dl is not None and dx else None
 
 
 def first_key(*keys):
@@ -324,11 +332,14 @@ CASES = [
             Quantity("impulse ratio |Δp_x|/Δp_y = μ while it slides: first to last sample of "
                      "`momentum_x`, `momentum_y`", "", first_key("impulse_ratio", "mu"),
                      impulse_ratio),
-            Quantity("spin gained: Δ`angular_momentum`, first to last sample", "kg·m²/s",
-                     first_key("angular_momentum_gain", "final_angular_momentum"),
-                     change("angular_momentum")),
+            Quantity("spin arm R = ΔL/P_t: Δ`angular_momentum` / Δ`momentum_x`, first to last "
+                     "sample", "m", "spin_arm", spin_arm),
         ],
         figure=fig_disk,
+        groups=("disk", "disk_implicit"),
+        notes=("The level plane with μ = 0.3 (groups `disk`, `disk_implicit`). The frictionless "
+               "and cone-edge groups of the sweep are gated on exact momentum conservation "
+               "(ci/gates/verification.toml) and not repeated here."),
         pending=("the case `disk_oblique` (cases/verification/, history column "
                  "`angular_momentum`, reference/verification.toml [disk_oblique]) is being "
                  "added; its reference keys are read as `impulse_ratio` (else `mu`) and "
@@ -459,7 +470,8 @@ def read_reference_ver(path=REFERENCE_VER):
 
 def case_runs(sweep, spec):
     names = (spec.case,) + tuple(spec.aliases)
-    return [r for r in sweep.runs if r.kind == "run" and r.get("case") in names]
+    return [r for r in sweep.runs if r.kind == "run" and r.get("case") in names
+            and (not spec.groups or r.group in spec.groups)]
 
 
 # ---------------------------------------------------------------------------------------------
