@@ -886,24 +886,20 @@ def part_id(title):
 
 
 def discover(main_dir, args):
+    """The accuracy, stability and verification folders: as given, else found beside or
+    inside the paper sweep's folder (unless --no-discover)."""
     parent = os.path.dirname(os.path.abspath(main_dir))
-    acc = args.accuracy
-    if acc is None and not args.no_discover:
-        for c in (os.path.join(parent, "accuracy"), os.path.join(main_dir, "accuracy")):
-            if os.path.exists(os.path.join(c, "summary.csv")):
-                acc = c
-                break
+    places = lambda name: (os.path.join(parent, name), os.path.join(main_dir, name))
+
+    def sweep_folder(given, name):
+        if given is not None or args.no_discover:
+            return given
+        return next((c for c in places(name) if os.path.exists(os.path.join(c, "summary.csv"))), None)
+
     stab = list(args.stability or [])
     if not stab and not args.no_discover:
-        stab = [c for c in (os.path.join(parent, "stability"), os.path.join(main_dir, "stability"))
-                if os.path.isdir(c)]
-    ver = args.verification
-    if ver is None and not args.no_discover:
-        for c in (os.path.join(parent, "verification"), os.path.join(main_dir, "verification")):
-            if os.path.exists(os.path.join(c, "summary.csv")):
-                ver = c
-                break
-    return acc, stab, ver
+        stab = [c for c in places("stability") if os.path.isdir(c)]
+    return sweep_folder(args.accuracy, "accuracy"), stab, sweep_folder(args.verification, "verification")
 
 
 def main(argv=None):

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <vector>
 
+#include "harness/case_setup.hpp"
+#include "harness/case_spec.hpp"
+#include "harness/input_error.hpp"
 #include "harness/mesh_generators.hpp"
 #include "solver/implicit.hpp"
 #include "solver/run.hpp"
@@ -216,6 +219,38 @@ TEST(BodyContact, BlockSlidingOnADeformableFloorDeceleratesAtMuG) {
   // Slid v0 t - mu g t^2 / 2 = 0.117 m, across a dozen floor segments.
   EXPECT_NEAR(ux.back(), 0.15 - 0.5 * mu * g * 0.15 * 0.15, 0.002);
   EXPECT_LT(r.penetration_max, 1e-9);
+}
+
+TEST(BodyContact, CaseFileContactPairs) {
+  const std::string head_on = std::string(RICOCHET_SOURCE_DIR) + "/cases/verification/head_on.toml";
+  // Read into one one-way pair (striker -> target); two_pass adds the reverse pair.
+  PreparedCase pc = prepare_case(read_case(head_on, {}));
+  ASSERT_EQ(pc.settings.body_pairs.size(), 1u);
+  EXPECT_EQ(pc.settings.body_pairs[0].slave, 0);
+  EXPECT_EQ(pc.settings.body_pairs[0].master, 1);
+  pc = prepare_case(read_case(head_on, {"contact_pairs[0].two_pass=true", "contact_pairs[0].friction=0.2"}));
+  ASSERT_EQ(pc.settings.body_pairs.size(), 2u);
+  EXPECT_EQ(pc.settings.body_pairs[1].slave, 1);
+  EXPECT_EQ(pc.settings.body_pairs[1].master, 0);
+  EXPECT_EQ(pc.settings.body_pairs[1].friction, 0.2);
+  // Bad input: one line naming the file and the key.
+  auto rejects = [&](const std::vector<std::string>& set, const std::string& key, const std::string& word) {
+    try {
+      read_case(head_on, set);
+      ADD_FAILURE() << set.front() << ": accepted";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("head_on.toml"), std::string::npos) << m;
+      EXPECT_NE(m.find(key), std::string::npos) << m;
+      EXPECT_NE(m.find(word), std::string::npos) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    }
+  };
+  rejects({"contact_pairs[0].slave=\"nobody\""}, "slave", "no body named");
+  rejects({"contact_pairs[0].master=\"striker\""}, "master", "self-contact");
+  rejects({"contact_pairs[0].friction=-0.1"}, "friction", "friction");
+  rejects({"contact_pairs[0].side=\"left\""}, "side", "unknown");
+  rejects({"scheme=\"explicit\""}, "scheme", "contact_pairs");
 }
 
 TEST(BodyContact, PairStepsDoNotAllocate) {
