@@ -49,18 +49,16 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
 // definite.
 void ImplicitIntegrator::use_direct() {
   direct_ = true;
-  // The matrix is symmetric, so its row-major arrays are also the column-major arrays.
-  a_col_ = Eigen::SparseMatrix<double>(system_.matrix.transpose());
-  ldlt_.analyzePattern(a_col_);
+  ldlt_.analyze(system_.matrix);
+  a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
 }
 
 bool ImplicitIntegrator::factorize() {
   const int n = model_.num_dofs();
-  double* a = a_col_.valuePtr();
+  double* a = a_values_.data();
   std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
   for (int attempt = 0; attempt < 12; ++attempt) {
-    ldlt_.factorize(a_col_);
-    if (ldlt_.info() == Eigen::Success && ldlt_.vectorD().minCoeff() > 0.0) {
+    if (ldlt_.factorize(a)) {
       if (attempt > 0) {
         ++shifted_iterations_;
         for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
@@ -87,7 +85,7 @@ void ImplicitIntegrator::constrain_matrix() {
 
 bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (direct_) {
-    x = ldlt_.solve(b);
+    ldlt_.solve(b, x);
     return true;
   }
   const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance,
@@ -103,7 +101,7 @@ bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   ++solver_switches_;
   use_direct();
   if (!factorize()) return false;
-  x = ldlt_.solve(b);
+  ldlt_.solve(b, x);
   return true;
 }
 

@@ -13,10 +13,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/SparseCholesky>
-
 #include "solver/pcg.hpp"
 #include "solver/run_monitor.hpp"
+#include "solver/sparse_ldlt.hpp"
 #include "solver/tangent.hpp"
 
 namespace ricochet {
@@ -24,7 +23,7 @@ namespace ricochet {
 enum class LinearSolverKind {
   automatic,  // see below
   pcg,        // Jacobi-preconditioned CG
-  ldlt,       // sparse LDL^T (Eigen SimplicialLDLT, AMD ordering; symbolic analysis once)
+  ldlt,       // sparse LDL^T (solver/sparse_ldlt.hpp, AMD ordering; symbolic analysis once)
 };
 // automatic: pcg up to dt = 3 critical_dt, ldlt beyond; a pcg solve that fails (indefinite
 // matrix of a far-off iterate) switches the run to ldlt.
@@ -84,12 +83,12 @@ class ImplicitIntegrator {
   SystemMatrix system_;
   Pcg pcg_;
   bool direct_ = false;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  SparseLdlt ldlt_;
   Eigen::MatrixXd columns_;   // A^-1 e for each active contact direction (2n x m)
   Eigen::MatrixXd w_;         // condensed compliance (m x m)
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
   Eigen::VectorXd r_vec_;     // dt R per active contact direction
-  Eigen::SparseMatrix<double> a_col_;  // column-major copy of A for the factorization
+  std::vector<double> a_values_;  // the values of A as factorized (with the shift, if any)
   Eigen::VectorXd inv_diag_;
   std::vector<unsigned char> fixed_;  // per DOF: prescribed
   std::vector<int> constrained_entries_;  // value positions of prescribed rows and columns

@@ -284,5 +284,35 @@ TEST(BodyContact, PairStepsDoNotAllocate) {
   }
 }
 
+// The implicit step allocates nothing either, with both linear solvers (the LDL^T path also
+// builds the exact condensed compliance W by column solves every step), between bodies and
+// against a rigid plane, with and without friction.
+TEST(BodyContact, ImplicitStepsDoNotAllocate) {
+  for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    for (double mu : {0.0, 0.2}) {
+      SCOPED_TRACE(std::string(solver == LinearSolverKind::pcg ? "pcg" : "ldlt") + " mu " + std::to_string(mu));
+      HeadOn h(mu, {1.0, -0.3});
+      h.settings.dt = 1e-7;
+      h.settings.obstacles = {make_line_obstacle("floor", Vec2::Zero(), Vec2::UnitY())};
+      h.settings.friction = {{mu}, {mu}};
+      ImplicitSettings im;
+      im.linear_solver = solver;
+      ImplicitIntegrator integrator(h.model, h.settings, im);
+      for (int n = 0; n < 5; ++n) ASSERT_TRUE(integrator.step(false)) << integrator.failure();  // warm up
+      const long before = g_allocations.load();
+      int active = 0;
+      for (int n = 0; n < 200; ++n) {
+        ASSERT_TRUE(integrator.step(n % 10 == 0)) << integrator.failure();
+        active = std::max(active, integrator.contact().active_count);
+      }
+      EXPECT_EQ(g_allocations.load() - before, 0);
+      EXPECT_GT(active, 2);  // the bars' interface and the striker on the floor
+      EXPECT_EQ(integrator.direct_solver(), solver == LinearSolverKind::ldlt);
+      if (solver == LinearSolverKind::ldlt) EXPECT_GT(integrator.exact_contact_solves(), 0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ricochet
+
