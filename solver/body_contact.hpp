@@ -25,8 +25,17 @@
 //      (two identical bars meeting end to end) to the face it moves into, not the side face;
 //   3. a node whose predicted position is not inside the master's bounding box (grown by its
 //      longest segment) has no segment: nothing is done for it.
-// A node that projects onto no segment (outside a convex corner of the master) is not in
-// contact.
+// (The tie and vertex rules are below.)
+// Vertex contact: a node that projects onto neither of two neighbouring segments (. -> v) and
+// (v -> .) lies in the wedge of their common vertex v: outside the master at a convex corner,
+// inside it at a concave one (where a node pressed into a dent of a deformed surface ends up).
+// Its contact is with the point v, gap n . (x_s - x_v), with n taken at the start of the step:
+// at a convex corner the direction from v to the node (the bisector if the node is on v), at
+// a concave corner the bisector of the two faces' normals. In step 1 this is the walk's result
+// when the projection leaves a segment and misses its neighbour on the other side; in step 2
+// the vertices whose wedge holds the node at the start of the step compete with the segments
+// by distance |x_s - x_v|. The contact is reported as the segment with xi clamped to the
+// vertex's end, so its stencil is (s, v) with coefficients (1, -1).
 #pragma once
 
 #include <array>
@@ -92,9 +101,10 @@ constexpr double kSegmentEps = 1e-6;  // relative tolerance on xi at segment end
 // The result of the segment choice: segment -1 when the node has none.
 struct NodeSegment {
   int segment = -1;
-  double xi = 0.0;  // clamped to [0, 1]
+  double xi = 0.0;  // clamped to [0, 1]; 0 or 1 for a vertex contact
   double gap = 0.0; // at the evaluation positions [m]
   Vec2 normal = Vec2::UnitY();
+  bool vertex = false;  // contact with the segment's end point xi (vertex contact)
 };
 
 // The segment choice above. `start(j)` and `eval(j)` give node j's position at the start of the
@@ -102,47 +112,92 @@ struct NodeSegment {
 template <class Start, class Eval, class Vel>
 NodeSegment find_segment(const Surface& surf, int node, int tracked, const Start& start, const Eval& eval,
                          const Vel& vel) {
-  const Vec2 x = eval(node);
+  const Vec2 x = eval(node), x0 = start(node);
   auto at_eval = [&](int seg) {
     const SurfaceSegment& sg = surf.segments[seg];
     return project_on_segment(eval(sg.a), eval(sg.b), x);
   };
   auto accept = [&](int seg, const SegmentProjection& p) {
-    return NodeSegment{seg, std::clamp(p.xi, 0.0, 1.0), p.gap, p.normal};
+    return NodeSegment{seg, std::clamp(p.xi, 0.0, 1.0), p.gap, p.normal, false};
   };
   auto inside = [](double xi) { return xi >= -kSegmentEps && xi <= 1.0 + kSegmentEps; };
-  // Evaluate `seg`, or its neighbour on the side the projection leaves it.
+  // Contact with the vertex shared by `seg` and `other`, the one after it in the chain when
+  // `after` (v = b of seg), else the one before it (v = a of seg). The frame is taken at the
+  // start of the step.
+  auto vertex = [&](int seg, int other, bool after) {
+    const SurfaceSegment& sg = surf.segments[seg];
+    const SurfaceSegment& so = surf.segments[other];
+    const int v = after ? sg.b : sg.a;
+    const Vec2 xv = start(v);
+    const Vec2 n_seg = project_on_segment(start(sg.a), start(sg.b), x0).normal;
+    const Vec2 n_other = project_on_segment(start(so.a), start(so.b), x0).normal;
+    // In chain order the incoming segment ends at v and the outgoing one starts there; the body
+    // is on the left, so a left turn (positive cross product) is a convex corner.
+    const Vec2 e_in = after ? Vec2(start(sg.b) - start(sg.a)) : Vec2(start(so.b) - start(so.a));
+    const Vec2 e_out = after ? Vec2(start(so.b) - start(so.a)) : Vec2(start(sg.b) - start(sg.a));
+    const bool convex = e_in.x() * e_out.y() - e_in.y() * e_out.x() > 0.0;
+    Vec2 n = n_seg + n_other;  // the bisector of the two faces' normals
+    n = n.norm() > 1e-12 ? Vec2(n.normalized()) : n_seg;
+    // Outside a convex corner (its wedge holds exterior points) the distance to the vertex is
+    // the gap, along the direction from the vertex to the node. Inside a concave corner (its
+    // wedge holds interior points) the node is pushed out along the bisector.
+    const Vec2 d = x0 - xv;
+    if (convex && d.norm() > 1e-12 * surf.max_length) n = d.normalized();
+    return NodeSegment{seg, after ? 1.0 : 0.0, n.dot(x - eval(v)), n, true};
+  };
+  // Evaluate `seg`, or its neighbour on the side the projection leaves it, or their vertex
+  // when the projection misses both.
   auto walk = [&](int seg) -> NodeSegment {
     const SegmentProjection p = at_eval(seg);
     if (inside(p.xi)) return accept(seg, p);
-    const int other = p.xi < 0.0 ? surf.segments[seg].prev : surf.segments[seg].next;
+    const bool after = p.xi > 1.0;
+    const int other = after ? surf.segments[seg].next : surf.segments[seg].prev;
     if (other < 0) return {};
     const SegmentProjection q = at_eval(other);
-    return inside(q.xi) ? accept(other, q) : NodeSegment{};
+    if (inside(q.xi)) return accept(other, q);
+    // Beyond the shared vertex on both: the node is in the vertex's wedge.
+    if (after ? q.xi < 0.0 : q.xi > 1.0) return vertex(seg, other, after);
+    return {};
   };
   if (tracked >= 0) {
     const NodeSegment r = walk(tracked);
     if (r.segment >= 0) return r;
   }
-  const Vec2 x0 = start(node), v0 = vel(node);
+  const Vec2 v0 = vel(node);
   const double tie = 1e-9 * surf.max_length;
   int best = -1;
   double best_dist = std::numeric_limits<double>::infinity(), best_approach = 0.0;
+  bool best_vertex = false;
   for (int seg = 0; seg < static_cast<int>(surf.segments.size()); ++seg) {
     const SurfaceSegment& sg = surf.segments[seg];
     const SegmentProjection p = project_on_segment(start(sg.a), start(sg.b), x0);
-    if (!inside(p.xi)) continue;
+    if (!inside(p.xi)) {
+      // The vertex a of seg, if the node is in its wedge (beyond the end of the previous
+      // segment too). Each vertex is seen once, from the segment that starts at it.
+      if (p.xi > 0.0 || sg.prev < 0) continue;
+      const SurfaceSegment& sp = surf.segments[sg.prev];
+      if (project_on_segment(start(sp.a), start(sp.b), x0).xi <= 1.0 + kSegmentEps) continue;
+      const double dist = (x0 - start(sg.a)).norm();
+      if (dist < best_dist - tie) {
+        best = seg;
+        best_dist = dist;
+        best_vertex = true;
+      }
+      continue;
+    }
     const double dist = std::abs(p.gap);
     if (dist > best_dist + tie) continue;
     const double xi = std::clamp(p.xi, 0.0, 1.0);
     const double approach = p.normal.dot(v0 - (1.0 - xi) * vel(sg.a) - xi * vel(sg.b));
-    if (dist < best_dist - tie || approach < best_approach) {
+    if (dist < best_dist - tie || best_vertex || approach < best_approach) {
       best = seg;
       best_dist = std::min(dist, best_dist);
       best_approach = approach;
+      best_vertex = false;
     }
   }
   if (best < 0 || best_dist > surf.max_length) return {};
+  if (best_vertex) return vertex(best, surf.segments[best].prev, false);
   return walk(best);
 }
 

@@ -103,8 +103,15 @@ TEST(BodyContact, SegmentChoice) {
   // approach direction.
   EXPECT_TRUE(right(find({2.0, 1.0}, {-1, 0})));
   EXPECT_TRUE(top(find({2.0, 1.0}, {0, -1})));
-  // Outside the convex corner (in its wedge): no face contains the projection.
-  EXPECT_LT(find({2.5, 1.5}, {-1, -1}).segment, 0);
+  // Outside the convex corner (in its wedge): no face contains the projection, so the contact
+  // is with the corner node (2, 1), along the direction from it to the node.
+  r = find({2.5, 1.5}, {-1, -1});
+  ASSERT_GE(r.segment, 0);
+  EXPECT_TRUE(r.vertex);
+  EXPECT_TRUE(r.normal.isApprox(Vec2(1, 1).normalized()));
+  EXPECT_NEAR(r.gap, std::sqrt(0.5), 1e-15);
+  const SurfaceSegment& corner_seg = s.segments[r.segment];
+  EXPECT_TRUE((r.xi == 0.0 ? x[corner_seg.a] : x[corner_seg.b]).isApprox(Vec2(2, 1)));
   // Tracking: the node tracked on the top face's right segment slides left past its end onto
   // the next segment of the chain (the top chain runs right to left: body on the left).
   const NodeSegment first = find({1.5, 1.0 - 1e-4}, {-1, 0});
@@ -114,6 +121,78 @@ TEST(BodyContact, SegmentChoice) {
   EXPECT_NE(moved.segment, first.segment);
   EXPECT_EQ(moved.segment, s.segments[first.segment].next);
   EXPECT_NEAR(moved.gap, -1e-4, 1e-15);
+}
+
+// Vertex contact (solver/body_contact.hpp): a node that moves diagonally from the wedge of a
+// convex corner into the body within one step would find no face at the start of the step;
+// a node pressed into a concave corner ends up in that corner's wedge inside the body, where
+// no face contains its projection either.
+TEST(BodyContact, VertexContact) {
+  // Convex: the 2 x 1 master of SegmentChoice, a node that starts outside the top-right corner
+  // and is predicted inside it.
+  {
+    const Model model = build_model({bar("m", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
+    const Surface s = make_surface(model, 0);
+    const int p = model.num_nodes();
+    std::vector<Vec2, Eigen::aligned_allocator<Vec2>> x0(p + 1), x1(p + 1), v(p + 1, Vec2::Zero());
+    for (int j = 0; j < p; ++j) x0[j] = x1[j] = model.ref.col(j);
+    x0[p] = {2.01, 1.01};
+    x1[p] = {1.99, 0.99};
+    v[p] = {-1, -1};
+    const NodeSegment r = find_segment(s, p, -1, [&](int j) { return x0[j]; }, [&](int j) { return x1[j]; },
+                                       [&](int j) { return v[j]; });
+    ASSERT_GE(r.segment, 0);
+    EXPECT_TRUE(r.vertex);
+    EXPECT_TRUE(r.normal.isApprox(Vec2(1, 1).normalized()));
+    EXPECT_NEAR(r.gap, -0.01 * std::sqrt(2.0), 1e-12);  // inside: the constraint acts
+    // Tracked on the top face's right segment, a node sliding right past the corner into the
+    // wedge keeps a vertex contact instead of losing contact.
+    const int top_right = [&] {
+      for (int q = 0; q < static_cast<int>(s.segments.size()); ++q)
+        if (x0[s.segments[q].a].isApprox(Vec2(2, 1))) return q;
+      return -1;
+    }();
+    ASSERT_GE(top_right, 0);
+    x0[p] = x1[p] = {2.002, 1.001};
+    const NodeSegment w = find_segment(s, p, top_right, [&](int j) { return x0[j]; }, [&](int j) { return x1[j]; },
+                                       [&](int j) { return v[j]; });
+    ASSERT_GE(w.segment, 0);
+    EXPECT_TRUE(w.vertex);
+    EXPECT_NEAR(w.gap, std::hypot(0.002, 0.001), 1e-12);
+  }
+  // Concave: an L of three unit cells (the top-right one missing). The corner (1, 1) is
+  // concave; a node at (0.9, 0.9) is inside the body in that corner's wedge.
+  {
+    BodyInput b;
+    b.name = "L";
+    b.mesh.nodes.resize(2, 8);
+    b.mesh.nodes << 0, 1, 2, 0, 1, 2, 0, 1,  //
+                    0, 0, 0, 1, 1, 1, 2, 2;
+    b.mesh.quads = {{0, 1, 4, 3}, {1, 2, 5, 4}, {3, 4, 7, 6}};
+    b.material = StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress);
+    const Model model = build_model({b}, PlaneMode::stress, Vec2::Zero());
+    const Surface s = make_surface(model, 0);
+    ASSERT_EQ(s.segments.size(), 8u);
+    const int p = model.num_nodes();
+    std::vector<Vec2, Eigen::aligned_allocator<Vec2>> x(p + 1), v(p + 1, Vec2::Zero());
+    for (int j = 0; j < p; ++j) x[j] = model.ref.col(j);
+    x[p] = {0.9, 0.9};
+    auto pos = [&](int j) { return x[j]; };
+    auto vel = [&](int j) { return v[j]; };
+    const NodeSegment r = find_segment(s, p, -1, pos, pos, vel);
+    ASSERT_GE(r.segment, 0);
+    EXPECT_TRUE(r.vertex);
+    EXPECT_TRUE(r.normal.isApprox(Vec2(1, 1).normalized()));  // the bisector of (0, 1) and (1, 0)
+    EXPECT_NEAR(r.gap, -0.2 / std::sqrt(2.0), 1e-12);
+    const SurfaceSegment& sg = s.segments[r.segment];
+    EXPECT_EQ(r.xi == 0.0 ? sg.a : sg.b, 4);  // node 4 is (1, 1)
+    // Just outside the concave corner, above the lower right cell's top: that face.
+    x[p] = {1.1, 1.05};
+    const NodeSegment f = find_segment(s, p, -1, pos, pos, vel);
+    EXPECT_FALSE(f.vertex);
+    EXPECT_TRUE(f.normal.isApprox(Vec2(0, 1)));
+    EXPECT_NEAR(f.gap, 0.05, 1e-12);
+  }
 }
 
 // Two identical bars end to end (literature 4, B2b): a striker at v0 hits a bar at rest, mu = 0.
