@@ -318,6 +318,10 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   if (const auto pe = root.table("penalty")) {
     c.penalty.scale_factor = pe->number("scale_factor", 0.1, Range{0.0, 1e6, true, false});
+    // LS-DYNA's SOFT = 1 and SOFSCL (soft_dt is set up from the run's step in case_setup).
+    const bool soft = pe->boolean("soft", false);
+    const double soft_scale = pe->number("soft_scale", 0.1, Range{0.0, 1.0, true, false});
+    c.penalty.soft_scale = soft ? soft_scale : 0.0;
     pe->finish();
   }
 

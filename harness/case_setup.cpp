@@ -143,6 +143,9 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   // combined limit 1/sqrt(1/dt_e^2 + 1/dt_p^2) of elements and springs (dt_p = min 2 sqrt(m/k)):
   // min(dt_e, dt_p) alone is not stable when the two are close (tests/test_penalty_contact.cpp).
   s.dt = stable_time_step(p.model, c.dt_safety);
+  // The soft constraint's springs k1 = soft_scale m / (2 dt^2) use the step the run would have
+  // without them: the elements' automatic step, or the fixed time.dt (LS-DYNA: the initial step).
+  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto ? s.dt : *c.dt;
   if (s.contact_method == RunSettings::ContactMethod::penalty && (!s.obstacles.empty() || !s.body_pairs.empty())) {
     const PenaltyState springs =
         make_penalty_state(p.model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);

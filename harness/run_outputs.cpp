@@ -144,10 +144,15 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   } else {
     j["implicit"] = nullptr;
   }
-  if (pc.spec.scheme == "explicit_penalty")
+  if (pc.spec.scheme == "explicit_penalty") {
     j["penalty_scale_factor"] = pc.spec.penalty.scale_factor;
-  else
+    j["penalty_soft_scale"] = pc.settings.penalty.soft_scale;
+    j["penalty_soft_dt"] = pc.settings.penalty.soft_scale > 0.0 ? Json(pc.settings.penalty.soft_dt) : Json();
+  } else {
     j["penalty_scale_factor"] = nullptr;
+    j["penalty_soft_scale"] = nullptr;
+    j["penalty_soft_dt"] = nullptr;
+  }
   j["wall_seconds"] = r.wall_seconds;
   j["cpu_seconds"] = r.cpu_seconds;
   j["element_steps_per_second"] = r.element_steps_per_second;

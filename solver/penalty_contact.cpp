@@ -115,18 +115,26 @@ PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>&
     m_master[q] = std::numeric_limits<double>::infinity();
     for (int j : p.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
   }
+  if (settings.soft_scale > 0.0) {
+    if (!(settings.soft_dt > 0.0)) throw std::logic_error("penalty contact: soft_scale > 0 needs soft_dt > 0");
+    p.soft_factor = settings.soft_scale / (2.0 * settings.soft_dt * settings.soft_dt);
+  }
   const std::size_t n = p.candidates.size();
   p.stiffness.resize(n);
+  p.bulk_stiffness.resize(n);
   p.pair_compliance.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     const ContactCandidate& cc = p.candidates[i];
     double k = k_node[cc.node];
+    double m_star = model.mass[2 * cc.node];
     if (cc.pair >= 0) {
       k = std::min(k, k_max[cc.pair]);  // the stiffest spring the node can meet (for the step)
       p.pair_compliance[i] = 1.0 / model.mass[2 * cc.node] + 1.0 / m_master[cc.pair];
+      m_star = std::min(m_star, m_master[cc.pair]);
     }
-    p.stiffness[i] = settings.scale_factor * k;
-    if (!(p.stiffness[i] > 0.0))
+    p.bulk_stiffness[i] = settings.scale_factor * k;
+    p.stiffness[i] = std::max(p.bulk_stiffness[i], p.soft_factor * m_star);
+    if (!(p.bulk_stiffness[i] > 0.0))
       throw std::logic_error("penalty contact: boundary node " + std::to_string(cc.node) + " has no boundary segment");
   }
   p.force_n.assign(n, 0.0);
@@ -192,10 +200,17 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
     const double g = oc.gap;
     const Vec2 t = oc.tangent();
     p.normal[k] = oc.normal;
-    // Between bodies: f_si min(k_slave, k_s) of the segment met this step.
-    const double stiff = cc.pair < 0 || p.segment[k] < 0
-                             ? p.stiffness[k]
-                             : std::min(p.stiffness[k], p.segment_stiffness[cc.pair][p.segment[k]]);
+    // Between bodies: f_si min(k_slave, k_s) of the segment met this step, at least the soft
+    // constraint's k1 of the stencil's lightest node.
+    double stiff = p.stiffness[k];
+    if (cc.pair >= 0 && p.segment[k] >= 0) {
+      stiff = std::min(p.bulk_stiffness[k], p.segment_stiffness[cc.pair][p.segment[k]]);
+      if (p.soft_factor > 0.0) {
+        double m_star = model.mass[2 * st.node[0]];
+        for (int j = 1; j < st.count; ++j) m_star = std::min(m_star, model.mass[2 * st.node[j]]);
+        stiff = std::max(stiff, p.soft_factor * m_star);
+      }
+    }
     const double fn = g < 0.0 ? -stiff * g : 0.0;
     double ft = 0.0;
     ContactStatus status = fn > 0.0 ? ContactStatus::slip : ContactStatus::open;

@@ -19,6 +19,10 @@
 //   The share of a segment that does not face the obstacle (a side edge ending at a bottom
 //   corner) is counted as well: the stiffness is a property of the node, as in LS-DYNA's
 //   slave-node option, not of the pair.
+// Soft constraint (PenaltySettings::soft_scale > 0, LS-DYNA SOFT = 1): every spring is at least
+//   k1 = soft_scale m* / (2 soft_dt^2)   (m* the lightest node of the contact's stencil),
+// so that a soft body meeting a stiff one, whose step is set by the stiff one, is not stopped by
+// springs scaled to its own small bulk modulus only.
 // Bulk modulus K: the 3D value K = lambda + 2 mu / 3 = E / (3 (1 - 2 nu)) of the material's
 // (E, nu), in plane stress and plane strain alike. LS-DYNA takes K from the material card
 // whatever the element formulation (its plane-stress solids, ELFORM 12, included), and the
@@ -53,12 +57,22 @@ namespace ricochet {
 
 struct PenaltySettings {
   double scale_factor = 0.1;  // f_si (LS-DYNA SLSFAC default) [-]
+  // LS-DYNA's SOFT = 1 (soft constraint): with soft_scale > 0 every spring is at least
+  //   k1 = soft_scale m* / (2 soft_dt^2),
+  // m* the smallest nodal mass of the contact (the slave node; between bodies also the master
+  // segment's nodes), soft_dt the step the run starts with. k = max(f_si k_bulk, k1): for a
+  // soft body against a stiff one, whose bulk-modulus springs are too soft to stop it. k1 keeps
+  // every spring's own step limit 2 sqrt(m*/(2 k1)) >= 2 soft_dt / sqrt(soft_scale).
+  double soft_scale = 0.0;  // SOFSCL; 0 = SOFT = 0 (bulk-modulus springs only) [-]
+  double soft_dt = 0.0;     // [s], > 0 when soft_scale > 0
 };
 
 // Preallocated working set, per-step results and run totals of the penalty phase.
 struct PenaltyState {
   std::vector<ContactCandidate> candidates;  // boundary node x obstacle, less prescribed nodes
-  std::vector<double> stiffness;             // per candidate, k [N/m]
+  std::vector<double> stiffness;             // per candidate, k [N/m] (between bodies: the largest, for the step)
+  std::vector<double> bulk_stiffness;        // per candidate, f_si min(k_i, largest k_s) between bodies [N/m]
+  double soft_factor = 0.0;                  // soft_scale / (2 soft_dt^2): k1 = soft_factor m* [1/s^2]
   std::vector<double> force_n;               // per candidate, f_n of the last step (>= 0) [N]
   std::vector<double> force_t;               // per candidate, tangential spring force f_t along t [N]
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> last_position;  // per candidate, x at the last step [m]

@@ -330,6 +330,20 @@ TEST(BodyContact, CaseFileContactPairs) {
   rejects({"contact_pairs[0].friction=-0.1"}, "friction", "friction");
   rejects({"contact_pairs[0].side=\"left\""}, "side", "unknown");
   rejects({"scheme=\"explicit\""}, "scheme", "contact_pairs");
+  // [penalty] soft / soft_scale (LS-DYNA SOFT = 1, SOFSCL): based on the elements' automatic
+  // step, or on a fixed time.dt.
+  const std::string penalty = "scheme=\"explicit_penalty\"";
+  pc = prepare_case(read_case(head_on, {penalty}));
+  EXPECT_EQ(pc.settings.penalty.soft_scale, 0.0);
+  pc = prepare_case(read_case(head_on, {penalty, "penalty.soft=true"}));
+  EXPECT_EQ(pc.settings.penalty.soft_scale, 0.1);
+  EXPECT_EQ(pc.settings.penalty.soft_dt, stable_time_step(pc.model, pc.spec.dt_safety));
+  EXPECT_LE(pc.settings.dt, pc.settings.penalty.soft_dt);
+  pc = prepare_case(read_case(head_on, {penalty, "penalty.soft=true", "penalty.soft_scale=0.3", "time.dt=1e-8"}));
+  EXPECT_EQ(pc.settings.penalty.soft_scale, 0.3);
+  EXPECT_EQ(pc.settings.penalty.soft_dt, 1e-8);
+  rejects({penalty, "penalty.soft_scale=2"}, "soft_scale", "1");
+  rejects({penalty, "penalty.soft=1"}, "soft", "true or false");
 }
 
 TEST(BodyContact, PairStepsDoNotAllocate) {

@@ -122,6 +122,34 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   EXPECT_THROW(make_penalty_state(gm, two, {{0.0, 0.0}}, {}, {0.0}), std::invalid_argument);
 }
 
+TEST(PenaltyStiffness, SoftConstraintByHand) {
+  // LS-DYNA's SOFT = 1: k = max(f_si k_bulk, k1), k1 = SOFSCL m / (2 dt^2). The 2 x 1 strip of
+  // RectangularCellsByHand: corner nodes 5e-4 kg, middle nodes 1e-3 kg.
+  const Mesh mesh = grid_mesh(0.04, 0.01, 2, 1, 0.0, false);
+  const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+  const double scale = 0.1, dt = 1e-5;
+  // A soft material (E = 1 MPa): f_si K e = 0.1 x 0.83 MPa x 0.01 m = 833 N/m at most, far below
+  // k1 = 0.1 x 5e-4 / (2e-10) = 2.5e5 N/m: k1 everywhere, and every spring's own limit is
+  // 2 sqrt(m / k1) = 2 dt sqrt(2 / SOFSCL), whatever the node's mass.
+  const Model soft = single_body_model(mesh, StVenantKirchhoff::make(1e6, kNu, kRho, PlaneMode::stress),
+                                       PlaneMode::stress, ElementKind::q4_full, kThick);
+  const PenaltyState p = make_penalty_state(soft, ground, {{0.0}}, {}, {0.1, scale, dt});
+  for (std::size_t c = 0; c < p.candidates.size(); ++c) {
+    const double m = soft.mass[2 * p.candidates[c].node];
+    EXPECT_NEAR(p.stiffness[c], scale * m / (2.0 * dt * dt), 1e-12 * p.stiffness[c]);
+    EXPECT_LT(p.bulk_stiffness[c], 1e-2 * p.stiffness[c]);
+  }
+  EXPECT_NEAR(penalty_critical_dt(soft, p), 2.0 * dt * std::sqrt(2.0 / scale), 1e-12 * dt);
+  // The stiff material of the other tests: its bulk springs (1.25-2 f K e = 1e6-1.7e6 N/m at
+  // f_si 0.3) exceed k1 = 2.5e5-5e5 N/m, so SOFT = 1 changes nothing.
+  const Model stiff = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
+  const PenaltyState plain = make_penalty_state(stiff, ground, {{0.0}}, {}, {0.3});
+  const PenaltyState with_soft = make_penalty_state(stiff, ground, {{0.0}}, {}, {0.3, scale, dt});
+  for (std::size_t c = 0; c < plain.candidates.size(); ++c) EXPECT_EQ(with_soft.stiffness[c], plain.stiffness[c]);
+  // SOFT = 1 needs the step it is based on.
+  EXPECT_THROW(make_penalty_state(soft, ground, {{0.0}}, {}, {0.1, scale, 0.0}), std::logic_error);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Blocks hitting the line y = 0, stepped by hand.
 
@@ -155,9 +183,12 @@ struct PenaltyImpact {
   std::vector<Obstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   double mu = 0.0;
   double f_si = 0.1;
+  double soft_scale = 0.0, soft_dt = 0.0;  // LS-DYNA SOFT = 1 (PenaltySettings)
   double dt = 0.0;
 
-  PenaltyState state() const { return make_penalty_state(model, obstacles, {{mu}}, {}, {f_si}); }
+  PenaltyState state() const {
+    return make_penalty_state(model, obstacles, {{mu}}, {}, {f_si, soft_scale, soft_dt});
+  }
 
   // evaluate -> penalty_phase -> update; each step recorded at t_n after the penalty phase.
   // Diverged: an inverted cell, a non-finite value, or energy above 10 x the initial.
@@ -296,6 +327,41 @@ TEST(PenaltyImpact, BlockBouncesBackAndPenetrationShrinksWithScaleFactor) {
     EXPECT_LT(ratio, 1.1 / std::sqrt(10.0));
     EXPECT_GT(ratio, 0.9 / 10.0);
   }
+}
+
+TEST(PenaltyImpact, SoftConstraintStopsASoftBlockSooner) {
+  // A rubber-like block (E = 1 MPa, c_p = 35 m/s) lands flat at 1 m/s, in a run whose step is
+  // set 10 x smaller by something stiffer (as when a soft body meets a stiff one). On its own
+  // step the two rules agree in order of magnitude: k1 / (f_si K e) ~ SOFSCL rho c^2 / (2 f_si K)
+  // ~ 1 for SOFSCL = f_si. With the small step k1 is 100 x larger, so the bulk-modulus springs
+  // (f_si 0.1) let the block sink deep and the SOFT = 1 springs stop it sooner. Both bounce
+  // back, and the energy balance (kinetic + strain + stored) holds through the impact.
+  const double size = 0.01, speed = 1.0, gap = 1e-5;
+  double depth[2];
+  for (int soft = 0; soft < 2; ++soft) {
+    Mesh mesh = grid_mesh(size, size, 4, 4, 0.0, false);
+    mesh.nodes.row(1).array() += gap;
+    PenaltyImpact im;
+    im.model = single_body_model(mesh, StVenantKirchhoff::make(1e6, kNu, kRho, PlaneMode::stress),
+                                 PlaneMode::stress, ElementKind::q4_full, kThick);
+    for (int i = 0; i < im.model.num_nodes(); ++i) im.model.initial_velocity.segment<2>(2 * i) = Vec2(0.0, -speed);
+    im.soft_dt = 0.09 * im.model.critical_dt;  // the run's step without springs
+    im.soft_scale = soft ? 0.1 : 0.0;
+    im.dt = std::min(im.soft_dt, penalty_stable_time_step(im.model, im.state(), 0.9));
+    const RunOutput out = im.run(std::lround(5e-3 / im.dt));
+    ASSERT_FALSE(out.diverged) << "soft " << soft;
+    depth[soft] = max_penetration(out);
+    double drift = 0.0;
+    for (const auto& r : out.steps)
+      drift = std::max(drift, std::abs(r.shadow_energy() - out.steps.front().shadow_energy()));
+    std::printf("[penalty] soft block, SOFT = %d: dt %.3e s, penetration max %.4e m (h = 2.5e-3 m), "
+                "energy drift %.2e of %.2e J, p_y end %.4e\n",
+                soft, im.dt, depth[soft], drift, out.steps.front().energy(), out.steps.back().momentum.y());
+    EXPECT_EQ(out.steps.back().active, 0) << "the block has left the line";
+    EXPECT_GT(out.steps.back().momentum.y(), 0.5 * speed * 0.5 * im.model.mass.sum());
+    EXPECT_LT(drift, 0.02 * out.steps.front().energy());
+  }
+  EXPECT_LT(depth[1], 0.5 * depth[0]);
 }
 
 // ---------------------------------------------------------------------------------------------
