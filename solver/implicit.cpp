@@ -182,10 +182,12 @@ bool ImplicitIntegrator::solve_contact() {
     return true;
   }
   cs.converged = direct_ ? false : uzawa_contact(c);
-  if (!cs.converged && !exact_contact(c)) {
-    ++cs.unconverged_steps;
-    failure_ = "contact did not converge in " + std::to_string(run_.contact.max_sweeps) + " Gauss-Seidel sweeps";
-    return false;
+  // As in the semi-explicit scheme, Gauss-Seidel that reaches contact.max_sweeps leaves its last
+  // iterate: the step goes on and is counted in unconverged_steps. Only a failed linear solve
+  // stops the run.
+  if (!cs.converged) {
+    if (!exact_contact(c)) return false;
+    if (!cs.converged) step_unconverged_ = true;
   }
   return true;
 }
@@ -266,13 +268,15 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
 // The condensed problem with the exact W = c dt H A^-1 H^T, built from one column solve per
 // active contact direction, then Gauss-Seidel over the contacts with each contact's local
 // problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
-// combination of the same columns.
+// combination of the same columns. Returns false only when a linear solve fails; whether
+// Gauss-Seidel converged within contact.max_sweeps is cs.converged.
 bool ImplicitIntegrator::exact_contact(double c) {
   ContactState& cs = contact_;
   const double dt = s_.dt;
   const int dirs = cs.any_friction ? 2 : 1;
   const int m = dirs * static_cast<int>(cs.active.size());
   ++exact_contact_solves_;
+  cs.converged = false;
   auto direction = [&](int a) -> Vec2 {
     const Vec2 n = cs.normal[cs.active[a / dirs]];
     return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
@@ -330,16 +334,18 @@ bool ImplicitIntegrator::exact_contact(double c) {
       r = next;
     }
     if (change <= tol * size || change == 0.0) {
-      for (int a = 0; a < m; ++a) {
-        const LocalPair r = cs.reaction[cs.active[a / dirs]];
-        r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
-      }
-      y_.noalias() = columns_.leftCols(m) * r_vec_.head(m);
-      build_impulse();
-      return true;
+      cs.converged = true;
+      break;
     }
   }
-  return false;
+  cs.sweeps = std::min(cs.sweeps, run_.contact.max_sweeps);
+  for (int a = 0; a < m; ++a) {
+    const LocalPair r = cs.reaction[cs.active[a / dirs]];
+    r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
+  }
+  y_.noalias() = columns_.leftCols(m) * r_vec_.head(m);
+  build_impulse();
+  return true;
 }
 
 bool ImplicitIntegrator::step(bool with_energy) {
@@ -364,6 +370,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) add_reaction(static_cast<int>(k));
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
+  step_unconverged_ = false;
   int sweeps = 0;
   double r = residual(false);
   if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
@@ -453,6 +460,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
     cs.tangential_force += r.t;
   }
   cs.sweeps = sweeps;
+  if (step_unconverged_) ++cs.unconverged_steps;
   if (cs.active_count > 0) {
     ++cs.steps_with_contact;
     cs.sweeps_total += sweeps;

@@ -66,7 +66,7 @@ class ImplicitIntegrator {
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   bool solve_contact();  // from dv_free_, fills y_ and contact_.reaction
   bool uzawa_contact(double c);        // true if it converged
-  bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel
+  bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
   bool factorize();
   void use_direct();
   void build_impulse();
@@ -102,6 +102,7 @@ class ImplicitIntegrator {
   long exact_contact_solves_ = 0;
   long shifted_iterations_ = 0;
   long solver_switches_ = 0;
+  bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 
 RunResult run_implicit(const Model& model, const RunSettings& settings,

@@ -406,6 +406,34 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
   }
 }
 
+// A contact solve that reaches contact.max_sweeps is not fatal in the implicit scheme either: as
+// in the semi-explicit scheme the last Gauss-Seidel iterate is used and the step is counted in
+// contact_unconverged_steps. The head-on bars with two passes (redundant constraints where the
+// end faces meet node on node) and a cap of 2 sweeps: the run ends, the steps are counted, and
+// the momentum, which no reaction of a body pair can change, is still conserved.
+TEST(BodyContact, ImplicitUnconvergedContactIsCountedNotFatal) {
+  for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    SCOPED_TRACE(solver == LinearSolverKind::pcg ? "pcg" : "ldlt");
+    HeadOn h(0.2, {1.0, -0.3});
+    h.settings.body_pairs.push_back({1, 0, 0.2});
+    h.settings.dt = 1e-7;
+    h.settings.end_time = 6e-5;
+    h.settings.contact.max_sweeps = 2;
+    ImplicitSettings im;
+    im.linear_solver = solver;
+    im.uzawa_sweeps = 1;
+    const RunResult r = run_implicit(h.model, h.settings, im);
+    ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+    EXPECT_GT(r.contact_unconverged_steps, 0);
+    EXPECT_LE(r.contact_unconverged_steps, r.contact_steps);
+    const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y");
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      EXPECT_NEAR(px[i], px.front(), 1e-13 * h.mass);
+      EXPECT_NEAR(py[i], py.front(), 1e-13 * h.mass);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ricochet
 
