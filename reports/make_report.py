@@ -1,20 +1,27 @@
 #!/usr/bin/python3
 """The paper report: Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside the
 paper's numbers, plus the work-precision diagram, the stability map, penetration over time and
-the runs that failed or diverged.
+the runs that failed or diverged, the verification cases and the Kim–Kwak-type problem.
 
     /usr/bin/python3 reports/make_report.py DIR [--accuracy ACC_DIR] [--stability PATH ...]
-                                                [--verification VER_DIR] [--out OUT] [--no-discover]
+                                                [--verification VER_DIR] [--kim-kwak KK_DIR]
+                                                [--kim-kwak-fields FIELDS_DIR] [--out OUT]
+                                                [--no-discover]
 
 DIR        a finished sweep of cases/paper_table1.toml (groups table1, penalty, friction).
 --accuracy a finished sweep of cases/accuracy.toml (work-precision diagram).
 --stability stability.json files, or folders searched for them (stability map).
 --verification a finished sweep of cases/verification/sweep.toml (the verification cases, each
            against its analytic reference: report_verification.py).
+--kim-kwak a finished sweep of cases/kim_kwak/sweep.toml (the Kim–Kwak-type problem's five runs
+           and its gates: report_kim_kwak.py).
+--kim-kwak-fields a run of cases/kim_kwak/rubber_groove.toml with its fields/*.vtu (the
+           deformed shapes of the Kim–Kwak-type problem).
 --out      report folder (default DIR/report).
-Without --accuracy / --stability / --verification, the script looks for DIR/../accuracy,
-DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification and DIR/verification (unless
---no-discover). A source that is missing gives a
+Without --accuracy / --stability / --verification / --kim-kwak / --kim-kwak-fields, the script
+looks for DIR/../accuracy, DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification,
+DIR/verification, DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove and DIR/rubber_groove
+(unless --no-discover). A source that is missing gives a
 "not available" section saying how to produce it, never a crash.
 
 Writes OUT/index.html (self-contained apart from its relative figure links), OUT/report.md,
@@ -39,9 +46,11 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 
 import report_figures as F  # noqa: E402
+import report_kim_kwak as RK  # noqa: E402
 import report_verification as RV  # noqa: E402
-from report_io import (REPO, REFERENCE_TOML, Sweep, find_stability_files, fmt_dt,  # noqa: E402
-                       fmt_g, git_commit, read_reference, read_stability, same, scheme_name)
+from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
+                       fmt_dt, fmt_g, git_commit, read_reference, read_stability, same,
+                       scheme_name)
 
 FIG1_TIMES = [5e-4, 1e-3, 2e-3, 3e-3]
 FIG2_TIME = 6e-4
@@ -676,7 +685,7 @@ def sec_penetration(ctx):
 def sec_failed(ctx):
     s = Section("failed", "Runs that failed or diverged (beyond the paper)", "table")
     s.header = ["run", "sweep", "status", "Δt (s)", "Δt / estimate", "at t (s)", "reason"]
-    for sw in [ctx["main"]] + [ctx[k] for k in ("acc", "ver") if ctx.get(k)]:
+    for sw in [ctx["main"]] + [ctx[k] for k in ("acc", "ver", "kk") if ctx.get(k)]:
         for r in sw.runs:
             if r.ok:
                 continue
@@ -725,6 +734,7 @@ SECTIONS = [
     ("stability", sec_stability),
     ("penetration", sec_penetration),
     ("verification", lambda c: RV.sections(c, Section)),   # one section per verification case
+    ("kim_kwak", lambda c: RK.sections(c, Section)),       # shapes, histories, runs table
     ("failed", sec_failed),
     ("runs", sec_runs),
 ]
@@ -865,6 +875,8 @@ def render(ctx, sections):
     man = {"generated_at": ctx["now"], "sweep": ctx["main"].dir,
            "accuracy": ctx["acc"].dir if ctx.get("acc") else None,
            "verification": ctx["ver"].dir if ctx.get("ver") else None,
+           "kim_kwak": ctx["kk"].dir if ctx.get("kk") else None,
+           "kim_kwak_fields": ctx.get("kk_fields"),
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
@@ -886,8 +898,8 @@ def part_id(title):
 
 
 def discover(main_dir, args):
-    """The accuracy, stability and verification folders: as given, else found beside or
-    inside the paper sweep's folder (unless --no-discover)."""
+    """The accuracy, stability, verification and Kim–Kwak-type folders: as given, else found
+    beside or inside the paper sweep's folder (unless --no-discover)."""
     parent = os.path.dirname(os.path.abspath(main_dir))
     places = lambda name: (os.path.join(parent, name), os.path.join(main_dir, name))
 
@@ -899,7 +911,28 @@ def discover(main_dir, args):
     stab = list(args.stability or [])
     if not stab and not args.no_discover:
         stab = [c for c in places("stability") if os.path.isdir(c)]
-    return sweep_folder(args.accuracy, "accuracy"), stab, sweep_folder(args.verification, "verification")
+    fields = args.kim_kwak_fields
+    if fields is None and not args.no_discover:
+        fields = next((c for c in places("rubber_groove") if RK.find_fields(c)), None)
+    return (sweep_folder(args.accuracy, "accuracy"), stab,
+            sweep_folder(args.verification, "verification"), sweep_folder(args.kim_kwak, "kim_kwak"),
+            os.path.abspath(fields) if fields else None)
+
+
+def kk_meta(kk, err):
+    if kk is None:
+        return ("not available" + (f" ({err})" if err else "") + f": run `{RK.KK_CMD}`")
+    gates = RK.gates_result(kk.dir)[0]
+    return (f"`{kk.dir}` ({len(kk.runs)} runs; "
+            + (f"gates {gates}" if gates else "no gates-junit.xml") + ")")
+
+
+def kk_fields_meta(folder):
+    fdir = RK.find_fields(folder)
+    if fdir is None:
+        return ("not available" + (f" (no fields/*.vtu in `{folder}`)" if folder else "")
+                + f": run `{RK.FIELDS_CMD}`")
+    return f"`{show_path(folder)}` ({len(field_files(fdir))} field files)"
 
 
 def main(argv=None):
@@ -910,9 +943,14 @@ def main(argv=None):
                     help="stability.json files or folders holding them")
     ap.add_argument("--verification", metavar="VER_DIR",
                     help="verification sweep folder (cases/verification/sweep.toml)")
+    ap.add_argument("--kim-kwak", metavar="KK_DIR",
+                    help="Kim–Kwak-type sweep folder (cases/kim_kwak/sweep.toml)")
+    ap.add_argument("--kim-kwak-fields", metavar="FIELDS_DIR",
+                    help="run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--no-discover", action="store_true",
-                    help="do not look for accuracy/, stability/ and verification/ next to DIR")
+                    help="do not look for accuracy/, stability/, verification/, kim_kwak/ and "
+                         "rubber_groove/ next to DIR")
     args = ap.parse_args(argv)
     try:
         main_sweep = Sweep(args.dir)
@@ -921,7 +959,7 @@ def main(argv=None):
         return 2
     out = os.path.abspath(args.out or os.path.join(args.dir, "report"))
     os.makedirs(out, exist_ok=True)
-    acc_dir, stab_paths, ver_dir = discover(args.dir, args)
+    acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = discover(args.dir, args)
     acc, acc_err = None, None
     if acc_dir:
         try:
@@ -934,11 +972,18 @@ def main(argv=None):
             ver = Sweep(ver_dir)
         except (OSError, ValueError) as e:
             ver_err = str(e)
+    kk, kk_err = None, None
+    if kk_dir:
+        try:
+            kk = Sweep(kk_dir)
+        except (OSError, ValueError) as e:
+            kk_err = str(e)
     stab_files = find_stability_files(stab_paths)
     ref = read_reference()
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     ctx = {"main": main_sweep, "acc": acc, "stab_files": stab_files, "ref": ref, "out": out,
-           "now": now, "ver": ver, "ver_err": ver_err}
+           "now": now, "ver": ver, "ver_err": ver_err, "kk": kk, "kk_err": kk_err,
+           "kk_fields": kk_fields}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -957,6 +1002,8 @@ def main(argv=None):
         ("Verification sweep", f"`{ver.dir}` ({len(ver.runs)} runs; references "
                                "`reference/verification.toml`)" if ver else
          ("not available" + (f" ({ver_err})" if ver_err else "") + f": run `{RV.VER_CMD}`")),
+        ("Kim–Kwak-type sweep", kk_meta(kk, kk_err)),
+        ("Kim–Kwak-type fields run", kk_fields_meta(kk_fields)),
         ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
                                if stab_files else f"not available: run `{STAB_CMD}` {STAB_MORE}")),
         ("Program", f"ricochet {main_sweep.version()}, `{program}`"

@@ -1,6 +1,6 @@
 """Readers for what ricochet writes: sweep folders (summary.csv, sweep.json, runs/<id>/),
-history.csv, summary.json, ASCII VTU field files, stability.json, and the paper's reference
-numbers (reference/cros2010.toml). numpy only; no meshio.
+history.csv, summary.json, ASCII VTU field files, stability.json, case files (TOML, with a run's
+overrides) and the paper's reference numbers (reference/cros2010.toml). numpy only; no meshio.
 
 Formats: docs/outputs.md, docs/sweeps.md, docs/stability.md.
 """
@@ -10,6 +10,7 @@ import glob
 import json
 import math
 import os
+import re
 import subprocess
 import tomllib
 import xml.etree.ElementTree as ET
@@ -104,23 +105,7 @@ class Run:
 
     def field_files(self):
         """[(time [s], path)] of the run's VTU files, from fields.pvd or the file names."""
-        fdir = os.path.join(self.folder, "fields")
-        pvd = os.path.join(fdir, "fields.pvd")
-        out = []
-        if os.path.exists(pvd):
-            try:
-                root = ET.parse(pvd).getroot()
-                for ds in root.iter("DataSet"):
-                    out.append((float(ds.get("timestep")), os.path.join(fdir, ds.get("file"))))
-            except (ET.ParseError, TypeError, ValueError):
-                out = []
-        if not out:
-            for p in sorted(glob.glob(os.path.join(fdir, "*.vtu"))):
-                try:
-                    out.append((read_vtu(p)["time"], p))
-                except Exception:  # noqa: BLE001 - an unreadable file is just skipped
-                    pass
-        return [(t, p) for t, p in out if os.path.exists(p)]
+        return field_files(os.path.join(self.folder, "fields"))
 
     def field_at(self, t, rel=0.02):
         """The VTU file whose time is nearest t (within rel·t), or None."""
@@ -206,6 +191,27 @@ def read_history(path):
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
+def field_files(fdir):
+    """[(time [s], path)] of the VTU files in a run's fields/ folder, from fields.pvd or, without
+    it, from the files' TimeValue."""
+    pvd = os.path.join(fdir, "fields.pvd")
+    out = []
+    if os.path.exists(pvd):
+        try:
+            root = ET.parse(pvd).getroot()
+            for ds in root.iter("DataSet"):
+                out.append((float(ds.get("timestep")), os.path.join(fdir, ds.get("file"))))
+        except (ET.ParseError, TypeError, ValueError):
+            out = []
+    if not out:
+        for p in sorted(glob.glob(os.path.join(fdir, "*.vtu"))):
+            try:
+                out.append((read_vtu(p)["time"], p))
+            except Exception:  # noqa: BLE001 - an unreadable file is just skipped
+                pass
+    return [(t, p) for t, p in out if os.path.exists(p)]
+
+
 def _array(elem):
     return np.array(elem.text.split(), dtype=float) if elem.text else np.zeros(0)
 
@@ -239,6 +245,56 @@ def read_vtu(path):
     disp = out["point_data"].get("displacement")
     out["displacement"] = disp[:, :2] if disp is not None else np.zeros_like(out["points"])
     return out
+
+
+def resolve_case_file(case_file):
+    """The case file a run names in summary.json (`case_file`, as given on its command line):
+    absolute, else relative to the repository, else to the current folder; None if not found."""
+    if not case_file:
+        return None
+    cands = [case_file] if os.path.isabs(case_file) else \
+        [os.path.join(REPO, case_file), os.path.abspath(case_file)]
+    return next((p for p in cands if os.path.isfile(p)), None)
+
+
+def _override_path(key):
+    """'obstacles[1].center' -> ['obstacles', 1, 'center']."""
+    out = []
+    for part in key.split("."):
+        m = re.fullmatch(r"([^\[\]]+)((?:\[\d+\])*)", part.strip().strip('"'))
+        if not m:
+            return None
+        out.append(m.group(1))
+        out += [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+    return out
+
+
+def read_case(path, overrides=()):
+    """A case TOML (docs/case-format.md) with the run's `--set KEY=VALUE` overrides applied
+    (summary.json `overrides`). An override that does not fit the file is left out."""
+    with open(path, "rb") as f:
+        case = tomllib.load(f)
+    for item in overrides or []:
+        if "=" not in item:
+            continue
+        key, text = item.split("=", 1)
+        try:
+            value = tomllib.loads("v = " + text)["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        keys = _override_path(key)
+        if not keys:
+            continue
+        obj = case
+        try:
+            for k in keys[:-1]:
+                if isinstance(k, str) and k not in obj:
+                    obj[k] = {}
+                obj = obj[k]
+            obj[keys[-1]] = value
+        except (KeyError, IndexError, TypeError):
+            continue
+    return case
 
 
 def read_reference(path=REFERENCE_TOML):

@@ -8,13 +8,17 @@ Builds, in a temporary folder and with the given ricochet binary:
   * two stability searches (semi-explicit bracketed, implicit up to the cap);
   * a tiny verification sweep: the groups of cases/verification/sweep.toml (bar_wall with the
     three schemes and a second penalty run at another scale factor; sliding_block with the three
-    schemes) on coarse meshes.
-Then runs the report twice: without the accuracy, stability and verification sources (those
-sections must say "not available" and how to produce them, everything else must be there), and
-with them (every section available, except the verification cases not in the tiny sweep, which
-must say so). Checks that every figure file exists and is non-empty, that every table has its
-expected rows and columns (computed here from the sweeps' summary.csv), and that every figure's
-caption names its runs.
+    schemes) on coarse meshes;
+  * the Kim–Kwak-type sweep cases/kim_kwak/sweep.toml with its gates (five runs, ~2.5 s, in the
+    background while the other sweeps run), placed next to the paper sweep so that the report
+    discovers it, and one run of cases/kim_kwak/rubber_groove.toml with its fields.
+Then runs the report twice: without the accuracy, stability, verification and Kim–Kwak-type
+sources (those sections must say "not available" and how to produce them, everything else must
+be there), and with them (every section available, except the verification cases not in the
+tiny sweep, which must say so). Checks that every figure file exists and is non-empty, that every
+table has its expected rows and columns (computed here from the sweeps' summary.csv), and that
+every figure's caption names its runs. The Kim–Kwak-type sections are also built with only one
+of their two sources.
 
     /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
 """
@@ -37,6 +41,7 @@ BASE = os.path.join(REPO, "cases", "oblique_plate.toml")
 VER_BASE = os.path.join(REPO, "cases", "verification", "bar_wall.toml")
 PY = sys.executable or "/usr/bin/python3"
 sys.path.insert(0, os.path.join(REPO, "reports"))
+import report_kim_kwak as RK  # noqa: E402
 import report_verification as RV  # noqa: E402  (the case specs: which sections to expect)
 
 BINARY = None
@@ -119,6 +124,10 @@ name = "block_implicit"
 set = {{ {BLOCK}, scheme = "implicit", "time.dt" = 1e-4 }}
 """
 VER_CASES = ("bar_wall", "sliding_block")  # in the tiny sweep; the other specs must be "not available"
+KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
+KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
+KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
+KK_IDS = ("kk_shapes", "kk_histories", "kk_runs")
 
 
 def run(cmd, ok=(0,), **kw):
@@ -202,6 +211,12 @@ class ReportSmoke(unittest.TestCase):
         cls.acc = os.path.join(t, "other", "acc")
         cls.stab = os.path.join(t, "other", "stab")
         cls.ver = os.path.join(t, "other", "ver")
+        cls.kk = os.path.join(t, "sweeps", "kim_kwak")  # next to the paper sweep: discovered
+        cls.kk_fields = os.path.join(t, "other", "rubber_groove")
+        # the Kim–Kwak-type sweep in the background; a failed gate (exit 4) must still report
+        kk_cmd = [BINARY, "sweep", KK_SWEEP, "--out", cls.kk, "--check", KK_GATES, "--quiet"]
+        kk = subprocess.Popen(kk_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        run([BINARY, "run", KK_CASE, "--out", cls.kk_fields, "--quiet"])
         run([BINARY, "sweep", os.path.join(t, "paper.toml"), "--out", cls.paper, "--jobs", "2",
              "--quiet"])
         run([BINARY, "sweep", os.path.join(t, "accuracy.toml"), "--out", cls.acc, "--jobs", "2",
@@ -214,13 +229,18 @@ class ReportSmoke(unittest.TestCase):
         run([BINARY, "stability", BASE, *coarse, "--set", "scheme=implicit", "--energy-bound", "1",
              "--end", "1e-3", "--max-runs", "8", "--out", os.path.join(cls.stab, "implicit_M1"),
              "--quiet"], ok=(0, 4, 5))
-        # 1: no accuracy / stability / verification sources, default output folder DIR/report
+        out, err = kk.communicate(timeout=120)
+        if kk.returncode not in (0, 4):
+            raise AssertionError(f"{' '.join(kk_cmd)}: exit {kk.returncode}\n{out}\n{err}")
+        # 1: no accuracy / stability / verification / Kim–Kwak-type sources, default output
+        # folder DIR/report
         run([PY, SCRIPT, cls.paper, "--no-discover"])
         cls.out_bare = os.path.join(cls.paper, "report")
-        # 2: every source
+        # 2: every source (the Kim–Kwak-type sweep discovered next to DIR)
         cls.out_full = os.path.join(t, "full_report")
         run([PY, SCRIPT, cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
-             "--verification", cls.ver, "--out", cls.out_full])
+             "--verification", cls.ver, "--kim-kwak-fields", cls.kk_fields,
+             "--out", cls.out_full])
 
     @classmethod
     def tearDownClass(cls):
@@ -256,7 +276,8 @@ class ReportSmoke(unittest.TestCase):
     def test_bare_report_says_what_is_missing(self):
         man, page = self.check_files(self.out_bare)
         by_id = {s["id"]: s for s in man["sections"]}
-        for sid in ("work_precision", "stability", "verification"):
+        missing = ("work_precision", "stability", "verification") + KK_IDS
+        for sid in missing:
             self.assertFalse(by_id[sid]["available"], sid)
             sec = section_html(page, sid)
             self.assertIn("not-available", sec)
@@ -265,20 +286,26 @@ class ReportSmoke(unittest.TestCase):
         self.assertIn("ricochet stability", section_html(page, "stability").replace(
             "build/ricochet stability", "ricochet stability"))
         self.assertIn("cases/verification/sweep.toml", section_html(page, "verification"))
+        self.assertIn("cases/kim_kwak/rubber_groove.toml", section_html(page, "kk_shapes"))
+        for sid in ("kk_histories", "kk_runs"):
+            self.assertIn("cases/kim_kwak/sweep.toml", section_html(page, sid))
         self.assertFalse([s for s in by_id if s.startswith("ver_")])
         for sid, s in by_id.items():
-            if sid not in ("work_precision", "stability", "verification"):
+            if sid not in missing:
                 self.assertTrue(s["available"], f"{sid}: {s['missing']}")
+        self.assertIsNone(man["kim_kwak"])
+        self.assertIsNone(man["kim_kwak_fields"])
         with open(os.path.join(self.out_bare, "report.md")) as f:
             md = f.read()
-        self.assertEqual(md.count("**Not available:**"), 3)
+        self.assertEqual(md.count("**Not available:**"), len(missing))
 
     def test_full_report_has_every_section(self):
         man, page = self.check_files(self.out_full)
         ver_ids = {"ver_" + c.case for c in RV.CASES}
         ver_ok = {"ver_" + c for c in VER_CASES}
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
-                    "work_precision", "stability", "penetration", "failed", "runs"} | ver_ids
+                    "work_precision", "stability", "penetration", "failed", "runs"} | ver_ids \
+            | set(KK_IDS)
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
         for sid, s in by_id.items():
@@ -291,6 +318,7 @@ class ReportSmoke(unittest.TestCase):
                 self.assertTrue(s["available"], f"{sid}: {s['missing']}")
                 self.assertNotIn("not-available", section_html(page, sid))
             self.assertEqual(s["part"] == RV.PART_TITLE, sid in ver_ids, sid)
+            self.assertEqual(s["part"] == RK.PART_TITLE, sid in KK_IDS, sid)
         # figures: expected files, caption names the runs
         for sid, stem in (("fig1", "fig1_deformed_shapes"), ("fig2", "fig2_von_mises_0.6ms"),
                           ("fig3", "fig3_energies_M2"), ("fig4", "fig4_energy_error"),
@@ -299,13 +327,28 @@ class ReportSmoke(unittest.TestCase):
                           ("fig7", "fig7_friction_dissipation"),
                           ("work_precision", "work_precision"), ("stability", "stability_map"),
                           ("penetration", "penetration"),
-                          *((f"ver_{c}", f"verification_{c}") for c in VER_CASES)):
+                          *((f"ver_{c}", f"verification_{c}") for c in VER_CASES),
+                          ("kk_shapes", "kim_kwak_shapes"),
+                          ("kk_histories", "kim_kwak_histories")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
             cap = sec[sec.index("<figcaption>"):sec.index("</figcaption>")]
             for rid in by_id[sid]["runs"]:
                 self.assertIn(rid, cap, f"{sid} caption does not name {rid}")
+        # Kim–Kwak-type: the discovered sweep, the given fields run; five runs drawn; one panel
+        # title per field time
+        self.assertEqual(man["kim_kwak"], os.path.abspath(self.kk))
+        self.assertEqual(man["kim_kwak_fields"], os.path.abspath(self.kk_fields))
+        kk_ids = [r["run_id"] for r in read_csv(os.path.join(self.kk, "summary.csv"))]
+        self.assertEqual(sorted(by_id["kk_histories"]["runs"]), sorted(kk_ids))
+        self.assertEqual(len(kk_ids), 5)
+        self.assertEqual(by_id["kk_shapes"]["runs"], [os.path.abspath(self.kk_fields)])
+        cap = section_html(page, "kk_shapes")
+        self.assertIn("groove: polyline, bump: circle", cap)
+        self.assertRegex(cap, r"\((\d[\d.]*, ){5}\d[\d.]* ms; fields/\*\.vtu\)")  # 6 times
+        intro = page[page.index('<h2 id="part-'):]
+        self.assertIn("docs/kim-kwak-type.md", intro)
         # Fig. 3 holds both the semi-explicit and the penalty run
         self.assertIn("penalty/000", by_id["fig3"]["runs"])
         # Fig. 2 is M2 at the smallest Δt, both schemes
@@ -343,7 +386,8 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(first("tab-penetration_table"),
                          [r["run_id"] for r in main if r["status"] == "ok"])
         ver = read_csv(os.path.join(self.ver, "summary.csv"))
-        not_ok = [r["run_id"] for r in main + acc + ver if r["status"] != "ok"]
+        kk = read_csv(os.path.join(self.kk, "summary.csv"))
+        not_ok = [r["run_id"] for r in main + acc + ver + kk if r["status"] != "ok"]
         self.assertTrue(not_ok)  # the tiny sweeps have diverged runs
         self.assertEqual(first("tab-failed"), not_ok)
         self.assertEqual(first("tab-runs"), [r["run_id"] for r in main])
@@ -373,11 +417,56 @@ class ReportSmoke(unittest.TestCase):
         bar_hdr = parser.headers["tab-ver_bar_wall_table"]
         self.assertIn("explicit penalty, penalty.scale_factor = 0.1", bar_hdr)
         self.assertIn("explicit penalty, penalty.scale_factor = 1", bar_hdr)
+        # Kim–Kwak-type runs: one row per run in scheme order, a label telling the runs of one
+        # scheme apart, the final probe values, the gate result under the table
+        order_kk = sorted(kk, key=lambda r: (order[r["summary.scheme"]], kk.index(r)))
+        rows = tables["tab-kk_runs"]
+        self.assertEqual(first("tab-kk_runs"), [r["run_id"] for r in order_kk])
+        self.assertEqual(parser.headers["tab-kk_runs"][0], "run")
+        self.assertEqual(len(parser.headers["tab-kk_runs"]), 10)
+        for row, r in zip(rows, order_kk):
+            self.assertEqual(len(row), 10)
+            self.assertTrue(row[9].startswith(r["status"]), row)
+            if r["status"] == "ok":
+                self.assertRegex(row[6], r"^-?\d")                     # final ball_centre_vx
+                self.assertRegex(row[7], r"^\(-?[\d.e-]+, -?[\d.e-]+\)$")  # block_corner
+        self.assertIn("semi-explicit, time.safety = 0.9", [r[1] for r in rows])
+        self.assertIn("explicit penalty, penalty.soft = false", [r[1] for r in rows])
+        with open(os.path.join(self.out_full, "index.html")) as f:
+            kk_sec = section_html(f.read(), "kk_runs")
+        self.assertRegex(kk_sec, r"<b>Gates</b>.*: \d+ passed, \d+ failed")
         # the manifest agrees with the page
         man = self.manifest(self.out_full)
         for s in man["sections"]:
             for t in s["tables"]:
                 self.assertEqual(len(t["rows"]), len(tables["tab-" + t["id"]]), t["id"])
+
+    def test_kim_kwak_one_source_only(self):
+        """Either source alone: its own sections built, the other's not available with the
+        command that produces it."""
+        import make_report
+        from report_io import Sweep
+        out = os.path.join(self.tmp, "kk_partial")
+        os.makedirs(out, exist_ok=True)
+        only_sweep = RK.sections({"out": out, "kk": Sweep(self.kk), "kk_fields": None},
+                                 make_report.Section)
+        only_fields = RK.sections({"out": out, "kk": None,
+                                   "kk_fields": os.path.join(self.kk_fields, "fields")},
+                                  make_report.Section)
+        self.assertEqual([s.id for s in only_sweep], list(KK_IDS))
+        self.assertEqual([s.available for s in only_sweep], [False, True, True])
+        self.assertIn(RK.FIELDS_CMD, only_sweep[0].missing)
+        self.assertEqual([s.available for s in only_fields], [True, False, False])
+        for s in only_fields[1:]:
+            self.assertIn(RK.KK_CMD, s.missing)
+        for s in only_sweep + only_fields:
+            self.assertIsNone(s.error, s.id)
+            for name in s.files:
+                self.assertGreater(os.path.getsize(os.path.join(out, name)), 1000, name)
+        # a folder without VTU files is not a fields run
+        none = RK.sections({"out": out, "kk": None, "kk_fields": self.kk}, make_report.Section)
+        self.assertFalse(none[0].available)
+        self.assertIn("no fields/*.vtu", none[0].missing)
 
     def test_markdown_table1(self):
         with open(os.path.join(self.out_full, "report.md")) as f:
