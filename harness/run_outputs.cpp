@@ -179,7 +179,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     const std::size_t last = h.rows() - 1;
     for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
                           "external_work", "friction_dissipation", "contact_work", "total_energy",
-                          "energy_error", "momentum_x", "momentum_y", "angular_momentum"})
+                          "energy_error", "momentum_x", "momentum_y", "angular_momentum", "contact_work_normal"})
       fin[k] = h.at(last, h.column(k));
     j["final"] = fin;
   }

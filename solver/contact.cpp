@@ -243,7 +243,7 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
     // Gap and frame at the predicted position, frozen for the step.
     ObstacleContact oc;
     if (cc.pair < 0) {
-      oc = closest(obstacles[cc.obstacle], predicted(i));
+      oc = step_frame(obstacles[cc.obstacle], model.ref.col(i) + s.u.segment<2>(2 * i), predicted(i));
     } else {
       NodeSegment ns;
       if (!pair_contact_geometry(model, c, k, s.u, s.v_half, predicted, ns)) {
@@ -320,15 +320,18 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
     const LocalPair r = c.reaction[k];
     const Vec2 force = r.n * n + r.t * t;
     Vec2 v_next = Vec2::Zero();
-    double work = 0.0;
+    double work = 0.0, work_normal = 0.0;
     for (int j = 0; j < st.count; ++j) {
       const int node = st.node[j];
       const Vec2 a = s.a.segment<2>(2 * node);
+      const Vec2 v_mid = s.v_half.segment<2>(2 * node) + 0.5 * dt * a;
       v_next += st.coef[j] * (s.v_half.segment<2>(2 * node) + dt * a);
-      work += (st.coef[j] * force).dot(s.v_half.segment<2>(2 * node) + 0.5 * dt * a);
+      work += (st.coef[j] * force).dot(v_mid);
+      work_normal += st.coef[j] * r.n * n.dot(v_mid);
     }
     c.friction_dissipation -= r.t * dt * t.dot(v_next);
     c.contact_work += dt * work;
+    c.contact_work_normal += dt * work_normal;
   }
 }
 

@@ -143,7 +143,7 @@ bool ImplicitIntegrator::solve_contact() {
     // the step (u0, v0).
     ObstacleContact oc;
     if (cc.pair < 0) {
-      oc = closest(run_.obstacles[cc.obstacle], x_pred(cc.node));
+      oc = step_frame(run_.obstacles[cc.obstacle], model_.ref.col(cc.node) + u0_.segment<2>(2 * cc.node), x_pred(cc.node));
     } else {
       NodeSegment ns;
       if (!pair_contact_geometry(model_, cs, k, u0_, v0_, x_pred, ns)) {
@@ -451,6 +451,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
       work += (st.coef[j] * (r.n * n + r.t * t)).dot(du_j);
     }
     cs.contact_work += work;
+    cs.contact_work_normal += r.n * n.dot(du);
     cs.friction_dissipation -= r.t * t.dot(du);
     cs.status[k] = classify(r, cc.friction_coeff);
     ++cs.active_count;

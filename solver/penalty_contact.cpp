@@ -270,13 +270,15 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
     const Stencil& st = p.stencil[k];
     const Vec2 n = p.normal[k], t{n.y(), -n.x()};
     const Vec2 force = p.force_n[k] * n + p.force_t[k] * t;
-    double work = 0.0;
+    double work = 0.0, work_normal = 0.0;
     for (int j = 0; j < st.count; ++j) {
       const int node = st.node[j];
       const Vec2 v_mid = s.v_half.segment<2>(2 * node) + 0.5 * dt * s.a.segment<2>(2 * node);
       work += (st.coef[j] * force).dot(v_mid);
+      work_normal += st.coef[j] * p.force_n[k] * n.dot(v_mid);
     }
     p.contact_work += dt * work;
+    p.contact_work_normal += dt * work_normal;
   }
 }
 

@@ -103,6 +103,7 @@ struct PenaltyState {
   // Accumulated over the run.
   double friction_dissipation = 0.0;  // sum of D (see above) [J]
   double contact_work = 0.0;          // sum dt F . v_n of the penalty forces on the bodies [J]
+  double contact_work_normal = 0.0;   // its part done by the normal forces f_n n [J]
   double penetration_max = 0.0;       // largest `penetration` seen [m]
   long steps_with_contact = 0;
 };

@@ -14,7 +14,8 @@ std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
                                 "momentum_y",    "von_mises_max",   "penetration_max",
                                 "contact_nodes", "normal_force",    "tangential_force",
                                 "contact_work",  "contact_stick",   "contact_slip",
-                                "contact_iterations", "contact_energy", "angular_momentum"};
+                                "contact_iterations", "contact_energy", "angular_momentum",
+                                "contact_work_normal"};
   for (const auto& p : probes)
     for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
   return c;

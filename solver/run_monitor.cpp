@@ -22,6 +22,7 @@ ContactReport report(const ContactState& c) {
   r.tangential_force = c.tangential_force;
   r.friction_dissipation = c.friction_dissipation;
   r.contact_work = c.contact_work;
+  r.contact_work_normal = c.contact_work_normal;
   return r;
 }
 
@@ -34,6 +35,7 @@ ContactReport report(const PenaltyState& p) {
   r.tangential_force = p.tangential_force;
   r.friction_dissipation = p.friction_dissipation;
   r.contact_work = p.contact_work;
+  r.contact_work_normal = p.contact_work_normal;
   r.contact_energy = p.stored_energy;
   return r;
 }
@@ -158,7 +160,7 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
                        static_cast<double>(c.active), c.normal_force, c.tangential_force,
                        c.contact_work, static_cast<double>(c.stick), static_cast<double>(c.slip),
                        static_cast<double>(c.iterations), c.contact_energy,
-                       angular_momentum(model_, s)});
+                       angular_momentum(model_, s), c.contact_work_normal});
     for (const auto& pr : settings_.probes) {
       const int d = 2 * pr.node;
       v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});

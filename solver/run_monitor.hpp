@@ -17,6 +17,7 @@ struct ContactReport {
   double normal_force = 0.0, tangential_force = 0.0;  // [N]
   double friction_dissipation = 0.0;  // [J], accumulated
   double contact_work = 0.0;          // [J], accumulated
+  double contact_work_normal = 0.0;   // [J], accumulated: the normal reactions' part
   double contact_energy = 0.0;        // stored penalty energy [J], now
 };
 

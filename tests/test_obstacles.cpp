@@ -103,6 +103,29 @@ TEST(Obstacles, PolylineSegmentsCornersAndRays) {
   expect_near_vec(c.normal, Vec2(0.0, 1.0));
 }
 
+TEST(Obstacles, StepFrameAtTheChordMidpointForCurvedObstacles) {
+  // A line: the gap at the predicted point and the line's normal, bit for bit as closest().
+  const Obstacle line = make_line_obstacle("l", {0.0, 0.1}, {0.3, 1.0});
+  const Vec2 x0(0.2, 0.15), xp(0.35, 0.05);
+  const ObstacleContact a = step_frame(line, x0, xp), b = closest(line, xp);
+  EXPECT_EQ(a.gap, b.gap);
+  EXPECT_EQ(a.normal, b.normal);
+  // A circle: the normal at the chord's midpoint, the gap linearized from there.
+  const Obstacle peg = make_circle_obstacle("c", {0.0, 0.0}, 1.0, false);
+  const double turn = 0.2;  // a node whose step runs along a chord of the circle
+  const Vec2 s0(std::cos(0.5), std::sin(0.5)), s1(std::cos(0.5 + turn), std::sin(0.5 + turn));
+  const ObstacleContact f = step_frame(peg, s0, s1);
+  EXPECT_TRUE(f.normal.isApprox(Vec2(std::cos(0.5 + turn / 2), std::sin(0.5 + turn / 2)), 1e-14));
+  EXPECT_NEAR(f.normal.dot(s1 - s0), 0.0, 1e-15);  // the chord is tangent to the frame
+  EXPECT_NEAR(f.gap, -(1.0 - std::cos(turn / 2)), 1e-14);
+  // Below the gap everywhere outside the circle (convex): the end position keeps g >= 0.
+  for (int k = 0; k < 50; ++k) {
+    const double th = 0.37 * k, r0 = 1.0 + 0.02 * (k % 5), r1 = 0.98 + 0.03 * (k % 7);
+    const Vec2 p0 = r0 * Vec2(std::cos(th), std::sin(th)), p1 = r1 * Vec2(std::cos(th + 0.1), std::sin(th + 0.1));
+    EXPECT_LE(step_frame(peg, p0, p1).gap, closest(peg, p1).gap + 1e-15) << k;
+  }
+}
+
 TEST(Obstacles, InvalidGeometryIsRejected) {
   EXPECT_THROW(make_circle_obstacle("c", Vec2::Zero(), 0.0, false), std::invalid_argument);
   EXPECT_THROW(make_polyline_obstacle("p", Points{{0.0, 0.0}}, true), std::invalid_argument);

@@ -92,6 +92,12 @@ TEST(VerificationCases, BarOnRigidWallSemiExplicit) {
   // Zero strain energy after separation, up to that vibration: measured 0.32 % of E0.
   EXPECT_LT(se.back(), 0.01 * r.initial_energy);
   EXPECT_LE(r.penetration_max, 1e-9);
+  // Contact work: all of it normal (mu = 0), and exactly the kinetic energy of the end column
+  // stopped dead at the first step, 1/2 (m/400) v0^2 = 8e-4 J: afterwards the wall's reaction
+  // acts on nodes at rest until they leave it.
+  const auto w = column(h, "contact_work"), wn = column(h, "contact_work_normal");
+  for (std::size_t i = 0; i < w.size(); ++i) EXPECT_NEAR(wn[i], w[i], 1e-12 * std::abs(w[i]) + 1e-18);
+  EXPECT_NEAR(wn.back(), -0.5 * (m / 400.0) * kBarV0 * kBarV0, 1e-12);
 }
 
 // reference/verification.toml [sliding_block]
@@ -150,6 +156,15 @@ TEST(VerificationCases, SlidingBlockSemiExplicit) {
   // The kinetic energy goes into friction: measured -0.064 % (the energy error).
   EXPECT_NEAR(r.friction_dissipation, 0.5 * m * kV0 * kV0, 0.005 * 0.5 * m * kV0 * kV0);
   EXPECT_LE(r.penetration_max, 1e-9);
+  // The tangential reactions remove what friction dissipates (measured: W_t + D = 5e-6 J of
+  // D = 0.1249 J; the slip dissipation uses v_{n+1/2}, the work v_n). The normal reactions
+  // take 7.5e-5 J out of the vertical vibration: the missing dissipation above.
+  const double w = h.at(h.rows() - 1, h.column("contact_work")), wn = h.at(h.rows() - 1, h.column("contact_work_normal"));
+  std::printf("[block] contact work %.6e J: normal %.4e J, tangential %.6e J; friction dissipation %.6e J\n",
+              w, wn, w - wn, r.friction_dissipation);
+  EXPECT_NEAR(w - wn, -r.friction_dissipation, 1e-4 * r.friction_dissipation);
+  EXPECT_LT(wn, 0.0);
+  EXPECT_GT(wn, -2e-3 * 0.5 * m * kV0 * kV0);
 }
 
 }  // namespace
