@@ -606,7 +606,28 @@ constexpr const char* kCheckUsage =
 
 // -----------------------------------------------------------------------------------------------
 
-GateFile parse_gates(std::string_view toml_text, const std::string& file) {
+namespace {
+
+std::string read_text_file(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path.string() + ": cannot open gate file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open gate file");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Where each gate name was first seen: its file and index there.
+struct NameSite {
+  std::string file;
+  std::size_t index = 0;
+};
+
+// Parses one gate file into gf: the gates of its `include` files first (recursively, paths
+// relative to the including file), then its own. `stack` holds the files being read, for cycles.
+void parse_into(std::string_view toml_text, const std::string& file, bool top, GateFile& gf,
+                std::map<std::string, NameSite>& names, std::vector<fs::path>& stack) {
   toml::table doc;
   try {
     doc = toml::parse(toml_text, file);
@@ -616,40 +637,59 @@ GateFile parse_gates(std::string_view toml_text, const std::string& file) {
   }
   const CaseContext ctx{file, {}};
   const TableReader root(doc, "", ctx);
-  GateFile gf;
-  gf.file = file;
-  gf.name = root.text("name", fs::path(file).stem().string());
-  if (gf.name.empty()) root.fail("name", "expected a non-empty name");
-  if (root.has("require_rows")) gf.require_rows = root.integer("require_rows", 0, 1, LONG_MAX);
+  const std::string name = root.text("name", fs::path(file).stem().string());
+  if (name.empty()) root.fail("name", "expected a non-empty name");
+  if (top) {
+    gf.name = name;
+    if (root.has("require_rows")) gf.require_rows = root.integer("require_rows", 0, 1, LONG_MAX);
+  } else if (root.has("require_rows")) {
+    root.fail("require_rows", "only the gate file given to the check sets require_rows, not an included one");
+  }
   root.integer("require_rows", 0, 1, LONG_MAX);
+  const std::vector<std::string> includes = root.texts("include");
   const auto gates = root.tables("gate");
   root.finish();
-  if (gates.empty() && !gf.require_rows)
-    root.fail("gate", "no [[gate]] tables; a gate file must check something (docs/gates.md)");
+
+  for (const std::string& inc : includes) {
+    const fs::path path = fs::path(file).parent_path() / inc;
+    std::error_code ec;
+    const fs::path key = fs::weakly_canonical(path, ec);
+    if (std::find(stack.begin(), stack.end(), key) != stack.end())
+      root.fail("include", "\"" + inc + "\" includes itself (an include cycle)");
+    if (!fs::is_regular_file(path, ec)) root.fail("include", "cannot open gate file " + path.string());
+    stack.push_back(key);
+    parse_into(read_text_file(path), path.string(), false, gf, names, stack);
+    stack.pop_back();
+  }
 
   const toml::array* raw = gates.empty() ? nullptr : doc.get("gate")->as_array();
-  std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < gates.size(); ++i) {
     Gate g = read_gate(gates[i], *(*raw)[i].as_table(), i, ctx);
     if (g.name == "require_rows" && gf.require_rows)
       gates[i].fail("name", "\"require_rows\" is the name of the row-count check; choose another name");
-    const auto [it, fresh] = names.emplace(g.name, i);
-    if (!fresh) gates[i].fail("name", "duplicate gate name \"" + g.name + "\" (also gate[" + std::to_string(it->second) + "])");
+    const auto [it, fresh] = names.emplace(g.name, NameSite{file, i});
+    if (!fresh)
+      gates[i].fail("name", "duplicate gate name \"" + g.name + "\" (also gate[" + std::to_string(it->second.index) + "]" +
+                                (it->second.file == file ? "" : " of " + it->second.file) + ")");
     gf.gates.push_back(std::move(g));
   }
+  if (top && gf.gates.empty() && !gf.require_rows)
+    root.fail("gate", "no [[gate]] tables; a gate file must check something (docs/gates.md)");
+}
+
+}  // namespace
+
+GateFile parse_gates(std::string_view toml_text, const std::string& file) {
+  GateFile gf;
+  gf.file = file;
+  std::map<std::string, NameSite> names;
+  std::error_code ec;
+  std::vector<fs::path> stack{fs::weakly_canonical(fs::path(file), ec)};
+  parse_into(toml_text, file, true, gf, names, stack);
   return gf;
 }
 
-GateFile read_gates(const fs::path& path) {
-  const std::string file = path.string();
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(file + ": cannot open gate file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(file + ": cannot open gate file");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return parse_gates(s.str(), file);
-}
+GateFile read_gates(const fs::path& path) { return parse_gates(read_text_file(path), path.string()); }
 
 std::vector<GateResult> evaluate_gates(const CsvTable& table, const GateFile& gates) {
   std::vector<GateResult> out;

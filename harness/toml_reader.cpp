@@ -116,6 +116,27 @@ long TableReader::integer(std::string_view key, long fallback, long lo, long hi)
   return x;
 }
 
+std::vector<std::string> TableReader::texts(std::string_view key) const {
+  read_.insert(std::string(key));
+  const toml::node* n = find(key);
+  if (!n) return {};
+  const std::string allowed = "a string or an array of non-empty strings";
+  std::vector<std::string> out;
+  if (n->is_string()) {
+    out.push_back(*n->value<std::string>());
+  } else if (const toml::array* a = n->as_array()) {
+    for (const toml::node& e : *a) {
+      if (!e.is_string()) fail(key, "expected " + allowed + "; got an element that is " + type_name(e));
+      out.push_back(*e.value<std::string>());
+    }
+  } else {
+    fail(key, "expected " + allowed + "; got " + show(*n));
+  }
+  for (const std::string& s : out)
+    if (s.empty()) fail(key, "expected " + allowed + "; got an empty string");
+  return out;
+}
+
 bool TableReader::boolean(std::string_view key, bool fallback) const {
   read_.insert(std::string(key));
   const toml::node* n = find(key);

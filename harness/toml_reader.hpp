@@ -52,6 +52,8 @@ class TableReader {
   Vec2 vec2(std::string_view key, Vec2 fallback) const;
   Vec2 vec2(std::string_view key) const;
   std::vector<double> numbers(std::string_view key, Range each) const;  // empty if absent
+  // A string or an array of non-empty strings; empty if absent.
+  std::vector<std::string> texts(std::string_view key) const;
   std::optional<TableReader> table(std::string_view key) const;
   std::vector<TableReader> tables(std::string_view key) const;  // array of tables; empty if absent
   std::vector<std::string> keys() const;  // all keys of this table (marks none as read)

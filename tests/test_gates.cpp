@@ -775,6 +775,61 @@ TEST(GateFile, ReadsFilesAndDefaults) {
   EXPECT_THROW(read_gates(dir.path() / "missing.toml"), InputError);
 }
 
+TEST(GateFile, IncludeSharesGatesBetweenFiles) {
+  // Two gate files that share most of their gates: the shared ones in common.toml, included
+  // (paths relative to the including file) ahead of each file's own gates.
+  TempDir dir;
+  dir.write("ci/gates/shared/common.toml",
+            "name = \"common\"\n"
+            "[[gate]]\nname = \"no failed runs\"\nkind = \"count\"\nwhere = { status = \"failed\" }\nmax = 0\n");
+  dir.write("ci/gates/shared/energy.toml",
+            "include = \"common.toml\"\n"
+            "[[gate]]\nname = \"energy\"\nkind = \"max\"\ncolumn = \"energy_error_max\"\nlimit = 0.02\n"
+            "where = { status = \"ok\" }\n");
+  const fs::path fast = dir.write("ci/gates/fast.toml",
+                                  "require_rows = 6\ninclude = [\"shared/energy.toml\"]\n"
+                                  "[[gate]]\nname = \"own\"\nkind = \"count\"\nwhere = { mesh = \"M2\" }\nmin = 2\n");
+  const GateFile g = read_gates(fast);
+  EXPECT_EQ(g.name, "fast");
+  EXPECT_EQ(g.require_rows, 6);
+  ASSERT_EQ(g.gates.size(), 3u);
+  EXPECT_EQ(g.gates[0].name, "no failed runs");  // innermost first, then in include order
+  EXPECT_EQ(g.gates[1].name, "energy");
+  EXPECT_EQ(g.gates[2].name, "own");
+  // Each gate's location names the file it is written in.
+  EXPECT_NE(g.gates[0].location.find("common.toml:2"), std::string::npos) << g.gates[0].location;
+  // They are evaluated like the file's own: r6 failed, so the shared count gate fails.
+  const std::vector<GateResult> r = evaluate_gates(sweep(), g);
+  ASSERT_EQ(r.size(), 4u);
+  EXPECT_TRUE(r[0].passed);   // require_rows
+  EXPECT_FALSE(r[1].passed);  // no failed runs
+  EXPECT_TRUE(r[2].passed);
+  EXPECT_TRUE(r[3].passed);
+
+  auto rejects = [&](const std::string& name, const std::string& text, const std::vector<std::string>& pieces) {
+    const fs::path p = dir.write(name, text);
+    try {
+      read_gates(p);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+      for (const auto& piece : pieces) EXPECT_NE(m.find(piece), std::string::npos) << "'" << piece << "' not in: " << m;
+    }
+  };
+  const std::string own = "[[gate]]\nname = \"own\"\nkind = \"count\"\nmax = 9\n";
+  rejects("ci/gates/missing_include.toml", "include = \"nowhere.toml\"\n" + own,
+          {"missing_include.toml:1: include: cannot open gate file", "nowhere.toml"});
+  dir.write("ci/gates/cycle_b.toml", "include = \"cycle_a.toml\"\n[[gate]]\nname = \"b\"\nkind = \"count\"\nmax = 9\n");
+  rejects("ci/gates/cycle_a.toml", "include = \"cycle_b.toml\"\n" + own, {"cycle_b.toml:1: include:", "include cycle"});
+  rejects("ci/gates/dup.toml", "include = \"shared/common.toml\"\n[[gate]]\nname = \"no failed runs\"\nkind = \"count\"\nmax = 1\n",
+          {"dup.toml:3: gate[0].name: duplicate gate name \"no failed runs\"", "common.toml"});
+  dir.write("ci/gates/shared/rows.toml", "require_rows = 3\n" + own);
+  rejects("ci/gates/rows.toml", "include = \"shared/rows.toml\"\n[[gate]]\nname = \"x\"\nkind = \"count\"\nmax = 1\n",
+          {"rows.toml:1: require_rows:", "included"});
+  rejects("ci/gates/bad_include.toml", "include = 3\n" + own, {"include: expected a string or an array of non-empty strings"});
+}
+
 // ----------------------------------------------------------------------------------------------
 // JUnit XML
 
