@@ -213,14 +213,7 @@ ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* ra
 }  // namespace
 
 CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
-  if (!std::filesystem::is_regular_file(file)) throw InputError(file + ": cannot open case file");
-  toml::table doc;
-  try {
-    doc = toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
-                     std::string(e.description()));
-  }
+  toml::table doc = parse_toml_file(file, "case file");
   CaseContext ctx{file, {}};
   CaseSpec c;
   c.file = file;

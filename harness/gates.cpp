@@ -69,18 +69,6 @@ std::string percent_of(double part, double whole) {
 // ---------------------------------------------------------------------------------------------
 // Reading the gate file.
 
-std::string node_kind(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date/time";
-  }
-}
-
 std::optional<MatchValue> match_value(const toml::node& n) {
   MatchValue v;
   if (n.is_string()) {
@@ -133,12 +121,12 @@ void flatten_selector(const TableReader& reader, const toml::table& raw, const s
       if (a->empty()) reader.fail(k, std::string(allowed) + "; got an empty array");
       for (const auto& e : *a) {
         auto v = match_value(e);
-        if (!v) reader.fail(k, std::string(allowed) + "; got an element that is " + node_kind(e));
+        if (!v) reader.fail(k, std::string(allowed) + "; got an element that is " + type_name(e));
         term.any_of.push_back(std::move(*v));
       }
     } else {
       auto v = match_value(node);
-      if (!v) reader.fail(k, std::string(allowed) + "; got " + node_kind(node));
+      if (!v) reader.fail(k, std::string(allowed) + "; got " + type_name(node));
       term.any_of.push_back(std::move(*v));
     }
     for (const auto& t : out)
@@ -628,13 +616,7 @@ struct NameSite {
 // relative to the including file), then its own. `stack` holds the files being read, for cycles.
 void parse_into(std::string_view toml_text, const std::string& file, bool top, GateFile& gf,
                 std::map<std::string, NameSite>& names, std::vector<fs::path>& stack) {
-  toml::table doc;
-  try {
-    doc = toml::parse(toml_text, file);
-  } catch (const toml::parse_error& e) {
-    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
-                     std::string(e.description()));
-  }
+  const toml::table doc = parse_toml(toml_text, file);
   const CaseContext ctx{file, {}};
   const TableReader root(doc, "", ctx);
   const std::string name = root.text("name", fs::path(file).stem().string());

@@ -295,14 +295,7 @@ std::vector<std::string> SweepRun::set_args() const {
 std::filesystem::path SweepRun::folder() const { return fs::path("runs") / fs::path(id); }
 
 SweepSpec read_sweep(const std::string& file) {
-  if (!fs::is_regular_file(file)) throw InputError(file + ": cannot open sweep file");
-  toml::table doc;
-  try {
-    doc = toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
-                     std::string(e.description()));
-  }
+  const toml::table doc = parse_toml_file(file, "sweep file");
   const CaseContext ctx{file, {}};
   const TableReader root(doc, "", ctx);
   SweepSpec s;

@@ -1,6 +1,7 @@
 #include "harness/toml_reader.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 namespace ricochet {
@@ -11,18 +12,6 @@ std::string fmt(double x) {
   s.precision(12);
   s << x;
   return s.str();
-}
-
-std::string type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date/time";
-  }
 }
 
 std::string show(const toml::node& n) {
@@ -37,6 +26,37 @@ std::string show(const toml::node& n) {
 }
 
 }  // namespace
+
+toml::table parse_toml(std::string_view text, const std::string& file) {
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                     std::string(e.description()));
+  }
+}
+
+toml::table parse_toml_file(const std::string& file, const std::string& what) {
+  if (!std::filesystem::is_regular_file(file)) throw InputError(file + ": cannot open " + what);
+  try {
+    return toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    throw InputError(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                     std::string(e.description()));
+  }
+}
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    default: return "a date/time";
+  }
+}
 
 bool Range::contains(double x) const {
   if (!std::isfinite(x)) return false;

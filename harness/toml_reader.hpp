@@ -29,6 +29,15 @@ struct Range {
   std::string describe() const;  // e.g. "> 0", "in [0, 1]", "in (-1, 0.5)"
 };
 
+// Parses TOML text; a syntax error is an InputError "FILE:LINE: TOML syntax error: ...".
+toml::table parse_toml(std::string_view text, const std::string& file);
+// The same for a file; `what` names it when it cannot be opened ("FILE: cannot open case file").
+toml::table parse_toml_file(const std::string& file, const std::string& what);
+
+// "a table", "an array", "a string", "an integer", "a number", "a boolean" or "a date/time":
+// the kind of a TOML value, for error messages.
+std::string type_name(const toml::node& n);
+
 // Shared by all readers of one case file.
 struct CaseContext {
   std::string file;                 // as given on the command line

@@ -25,7 +25,6 @@
 //      (two identical bars meeting end to end) to the face it moves into, not the side face;
 //   3. a node whose predicted position is not inside the master's bounding box (grown by its
 //      longest segment) has no segment: nothing is done for it.
-// (The tie and vertex rules are below.)
 // Vertex contact: a node that projects onto neither of two neighbouring segments (. -> v) and
 // (v -> .) lies in the wedge of their common vertex v: outside the master at a convex corner,
 // inside it at a concave one (where a node pressed into a dent of a deformed surface ends up).

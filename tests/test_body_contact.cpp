@@ -401,7 +401,9 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
       EXPECT_EQ(g_allocations.load() - before, 0);
       EXPECT_GT(active, 2);  // the bars' interface and the striker on the floor
       EXPECT_EQ(integrator.direct_solver(), solver == LinearSolverKind::ldlt);
-      if (solver == LinearSolverKind::ldlt) EXPECT_GT(integrator.exact_contact_solves(), 0);
+      if (solver == LinearSolverKind::ldlt) {
+        EXPECT_GT(integrator.exact_contact_solves(), 0);
+      }
     }
   }
 }
