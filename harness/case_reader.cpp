@@ -336,6 +336,11 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   if (const auto out = root.table("output")) {
     c.sample_interval = out->number("interval", c.sample_interval, Range::non_negative());
     c.field_times = out->numbers("fields", Range::non_negative());  // times after the end are skipped
+    const std::string measure = out->choice("stress_measure", "cauchy", {"cauchy", "pk2", "kirchhoff"});
+    c.stress_measure = measure == "pk2"         ? StressMeasure::pk2
+                       : measure == "kirchhoff" ? StressMeasure::kirchhoff
+                                                : StressMeasure::cauchy;
+    c.stress_every_step = out->boolean("stress_every_step", true);
     for (const auto& p : out->tables("probes")) {
       c.probes.push_back(read_probe(p, first_body));
       for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)

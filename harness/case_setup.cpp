@@ -102,6 +102,8 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   s.end_time = c.end_time;
   s.sample_interval = c.sample_interval;
   s.field_times = c.field_times;
+  s.stress_measure = c.stress_measure;
+  s.stress_every_step = c.stress_every_step;
   s.energy_growth_limit = c.energy_growth_limit;
   s.monitor_every = c.monitor_every;
 

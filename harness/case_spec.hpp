@@ -117,6 +117,8 @@ struct CaseSpec {
 
   double sample_interval = 0.0;   // [s]
   std::vector<double> field_times;  // [s]
+  StressMeasure stress_measure = StressMeasure::cauchy;  // of von_mises_max and the fields
+  bool stress_every_step = true;  // von_mises_max over every step (else over the samples)
   std::vector<ProbeSpec> probes;
 
   double energy_growth_limit = 2.0;  // [-]

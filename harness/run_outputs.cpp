@@ -161,8 +161,37 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["penetration_max"] = r.penetration_max;
   j["friction_dissipation"] = r.friction_dissipation;
   j["contact_work"] = r.contact_work;
+  // Stress peaks over every step (not over the samples), docs/outputs.md.
+  auto where = [&](const StressPeak& p) {
+    if (p.cell < 0) return Json();
+    Json w = Json::object();
+    w["body"] = pc.model.bodies[p.body].name;
+    w["element"] = p.element;
+    w["x"] = p.x;
+    w["y"] = p.y;
+    return w;
+  };
+  auto by_measure = [](const VonMises2& maxima) {
+    Json m = Json::object();
+    for (int k = 0; k < kStressMeasures; ++k) m[stress_measure_name(static_cast<StressMeasure>(k))] = maxima[k];
+    return m;
+  };
+  j["stress_measure"] = stress_measure_name(r.stress_measure);
+  j["stress_every_step"] = pc.settings.stress_every_step;
   j["von_mises_max"] = r.von_mises_max;
   j["von_mises_max_time"] = r.von_mises_max_time;
+  j["von_mises_max_at"] = where(r.von_mises_peak);
+  j["von_mises_interior_max"] = r.von_mises_interior_peak.value;
+  j["von_mises_interior_max_time"] = r.von_mises_interior_peak.time;
+  j["von_mises_interior_max_at"] = where(r.von_mises_interior_peak);
+  j["von_mises_sampled_max"] = by_measure(r.von_mises_sampled_max);
+  j["total_mass"] = r.total_mass;
+  j["contact_impulse_normal"] = r.contact_impulse_normal;
+  j["contact_impulse_tangential"] = r.contact_impulse_tangential;
+  const bool touched = r.contact_first_time >= 0.0;
+  j["contact_start_time"] = touched ? Json(r.contact_first_time) : Json();
+  j["contact_end_time"] = touched ? Json(r.contact_last_time) : Json();
+  j["contact_duration"] = touched ? Json(r.contact_last_time - r.contact_first_time) : Json();
   Json ci = Json::object();
   ci["mean"] = r.contact_sweeps_mean;
   ci["max"] = r.contact_sweeps_max;
@@ -182,6 +211,10 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
                           "energy_error", "momentum_x", "momentum_y", "angular_momentum", "contact_work_normal"})
       fin[k] = h.at(last, h.column(k));
     j["final"] = fin;
+    // Rebound velocity: the final linear momentum over the total mass [m/s].
+    const bool massive = r.total_mass > 0.0;
+    j["rebound_velocity_x"] = massive ? Json(h.at(last, h.column("momentum_x")) / r.total_mass) : Json();
+    j["rebound_velocity_y"] = massive ? Json(h.at(last, h.column("momentum_y")) / r.total_mass) : Json();
   }
   Json probes = Json::array();
   for (const auto& p : pc.probes) {

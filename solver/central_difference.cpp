@@ -26,8 +26,8 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 }
 
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
-              bool with_energy) {
-  s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy);
+              bool with_energy, const StressTracking* stress) {
+  s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy, stress);
   s.a = model.inv_mass.cwiseProduct(s.f_ext - s.f_int);
   s.hourglass_dissipation += s.dt * s.forces.hourglass_power;
   if (s.step == 0) s.v_half -= 0.5 * s.dt * s.a;

@@ -48,8 +48,9 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 // and the work of their reactions, accumulated by the trapezoidal rule in time (the rule under
 // which 1/2 v_n^T M v_n changes by the work of the forces, to O(dt^2)). At n = 0 also sets
 // v_{-1/2} = v_0 - dt/2 a_0.
+// With `stress` (internal_forces()) the pass also ranks the step's stresses.
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
-              bool with_energy);
+              bool with_energy, const StressTracking* stress = nullptr);
 
 // Phase 2: v_{n+1/2} = v_{n-1/2} + dt a_n, u_{n+1} = u_n + dt v_{n+1/2}, t = (n+1) dt.
 void update(State& s);

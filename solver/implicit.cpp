@@ -488,6 +488,9 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   const long planned = monitor.planned_steps();
   for (;;) {
     const long n = s.step;
+    // The Newton iterates' force passes are not states of the run: the converged state's
+    // stresses come from a stress pass of their own.
+    if (const StressTracking* st = monitor.stress_tracking(n)) monitor.track_stress(s, stress_peaks(model, s.u.data(), *st));
     if (monitor.is_monitor_step(n)) {
       if (!monitor.observe(s, integrator.contact_report(), kinetic0)) break;
       if (progress) progress(n, planned, s.time);
@@ -496,6 +499,11 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
     if (!integrator.step(monitor.is_monitor_step(n + 1))) {
       monitor.diverge(s, integrator.failure());
       break;
+    }
+    if (with_contact) {
+      const ContactState& c = integrator.contact();
+      // The step just taken: its reactions acted over [t_n, t_n+1].
+      monitor.contact_step(s.time - s.dt, s.dt, c.active_count, c.normal_force, c.tangential_force);
     }
     if (!(s.forces.min_jacobian > 0.0)) {
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");

@@ -1,6 +1,7 @@
 #include "solver/internal_forces.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "solver/kinematics.hpp"
 
@@ -12,52 +13,102 @@ namespace {
 // exhausted GCC's inlining budget and the kernels ran 3x slower.
 
 // Elements whose cells share one deformation gradient per integration point: T3 and Q4 2x2.
-template <bool kEnergy, class Mat>
-[[gnu::noinline]] void t3_forces(const T3Block& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
+template <bool kEnergy, int kStress, class Mat>
+[[gnu::noinline, gnu::flatten]] void t3_forces(const T3Block& b, const Mat& material, const double* u, double* f,
+                                             const StressTracking* tracking, ForceTotals& t) {
+  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
   double energy = 0.0, min_j = t.min_jacobian;
+  StressPeaks peaks = t.stress;
+  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
+  const double threshold = tracking ? tracking->threshold : 0.0;
+  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const T3Geom& g = b.geom[e];
     const Grad3 ue = gather<3>(u, b.conn[e]);
     const Mat2 F = deformation_gradient<3>(ue, g.dndx);
-    min_j = std::min(min_j, F.determinant());
+    const double det_f = F.determinant();
+    min_j = std::min(min_j, det_f);
     const Mat2 P = mat.first_piola(F);
     scatter<3>(f, b.conn[e], g.vol * g.dndx * P.transpose());
     if constexpr (kEnergy) energy += g.vol * mat.energy_density(F);
+    if constexpr (kStress) {
+      if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
+        const int cell = b.first_cell + static_cast<int>(e);
+        peaks.add(von_mises_ratio(mat, F, P, det_f, measure), cell, contact_cell[cell] != 0);
+      }
+    }
   }
   t.strain_energy += energy;
   t.min_jacobian = min_j;
+  t.stress = peaks;
 }
 
-template <bool kEnergy, class Mat>
-[[gnu::noinline]] void q4_full_forces(const Q4FullBlock& b, const Mat& mat, const double* u, double* f, ForceTotals& t) {
+template <bool kEnergy, int kStress, class Mat>
+[[gnu::noinline, gnu::flatten]] void q4_full_forces(const Q4FullBlock& b, const Mat& material, const double* u, double* f,
+                                                  const StressTracking* tracking, ForceTotals& t) {
+  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
   double energy = 0.0, min_j = t.min_jacobian;
+  StressPeaks peaks = t.stress;
+  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
+  const double threshold = tracking ? tracking->threshold : 0.0;
+  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const Q4FullGeom& g = b.geom[e];
     const Grad4 ue = gather<4>(u, b.conn[e]);
     Grad4 fe = Grad4::Zero();
+    [[maybe_unused]] VonMisesRatio vm2;
     for (int q = 0; q < 4; ++q) {
       const Mat2 F = deformation_gradient<4>(ue, g.dndx[q]);
-      min_j = std::min(min_j, F.determinant());
-      fe.noalias() += g.vol[q] * g.dndx[q] * mat.first_piola(F).transpose();
+      const double det_f = F.determinant();
+      min_j = std::min(min_j, det_f);
+      const Mat2 P = mat.first_piola(F);
+      fe.noalias() += g.vol[q] * g.dndx[q] * P.transpose();
       if constexpr (kEnergy) energy += g.vol[q] * mat.energy_density(F);
+      if constexpr (kStress) {
+        if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
+          const VonMisesRatio r = von_mises_ratio(mat, F, P, det_f, measure);
+          if (ratio_greater(r, vm2)) vm2 = r;
+        }
+      }
     }
     scatter<4>(f, b.conn[e], fe);
+    if constexpr (kStress) {
+      if (vm2.num > 0.0) {
+        const int cell = b.first_cell + static_cast<int>(e);
+        peaks.add(vm2, cell, contact_cell[cell] != 0);
+      }
+    }
   }
   t.strain_energy += energy;
   t.min_jacobian = min_j;
+  t.stress = peaks;
 }
 
 // One-point Q4 with Flanagan-Belytschko hourglass forces f_I = gamma_I Q, Q = c q.
-template <bool kEnergy, bool kViscous, class Mat>
-[[gnu::noinline]] void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& mat, const double* u,
-                         const double* v, double* f, ForceTotals& t) {
+template <bool kEnergy, int kStress, bool kViscous, class Mat>
+[[gnu::noinline, gnu::flatten]] void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& material, const double* u,
+                                                       const double* v, double* f, const StressTracking* tracking,
+                                                       ForceTotals& t) {
+  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
   double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
+  StressPeaks peaks = t.stress;
+  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
+  const double threshold = tracking ? tracking->threshold : 0.0;
+  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
   for (std::size_t e = 0; e < b.conn.size(); ++e) {
     const Q4HourglassGeom& g = b.geom[e];
     const Grad4 ue = gather<4>(u, b.conn[e]);
     const Mat2 F = deformation_gradient<4>(ue, g.dndx);
-    min_j = std::min(min_j, F.determinant());
-    Grad4 fe = g.vol * g.dndx * mat.first_piola(F).transpose();
+    const double det_f = F.determinant();
+    min_j = std::min(min_j, det_f);
+    const Mat2 P = mat.first_piola(F);
+    Grad4 fe = g.vol * g.dndx * P.transpose();
+    if constexpr (kStress) {
+      if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
+        const int cell = b.first_cell + static_cast<int>(e);
+        peaks.add(von_mises_ratio(mat, F, P, det_f, measure), cell, contact_cell[cell] != 0);
+      }
+    }
     if constexpr (kViscous) {
       const Vec2 qdot = gather<4>(v, b.conn[e]).transpose() * g.gamma;
       const Vec2 Q = g.hourglass_coeff * qdot;
@@ -75,57 +126,111 @@ template <bool kEnergy, bool kViscous, class Mat>
   t.hourglass_energy += hg_energy;
   t.hourglass_power += hg_power;
   t.min_jacobian = min_j;
+  t.stress = peaks;
 }
 
-template <bool kEnergy>
-void all_blocks(const Model& model, const double* u, const double* v, double* f, ForceTotals& t) {
+template <bool kEnergy, int kStress>
+void all_blocks(const Model& model, const double* u, const double* v, double* f, const StressTracking* cc,
+                ForceTotals& t) {
   for (const auto& b : model.q4_hourglass)
     std::visit(
         [&](const auto& mat) {
           if (b.form == HourglassForm::viscous)
-            q4_hourglass_forces<kEnergy, true>(b, mat, u, v, f, t);
+            q4_hourglass_forces<kEnergy, kStress, true>(b, mat, u, v, f, cc, t);
           else
-            q4_hourglass_forces<kEnergy, false>(b, mat, u, v, f, t);
+            q4_hourglass_forces<kEnergy, kStress, false>(b, mat, u, v, f, cc, t);
         },
         b.material);
   for (const auto& b : model.q4_full)
-    std::visit([&](const auto& mat) { q4_full_forces<kEnergy>(b, mat, u, f, t); }, b.material);
+    std::visit([&](const auto& mat) { q4_full_forces<kEnergy, kStress>(b, mat, u, f, cc, t); }, b.material);
   for (const auto& b : model.t3)
-    std::visit([&](const auto& mat) { t3_forces<kEnergy>(b, mat, u, f, t); }, b.material);
+    std::visit([&](const auto& mat) { t3_forces<kEnergy, kStress>(b, mat, u, f, cc, t); }, b.material);
 }
 
 }  // namespace
 
 ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
-                            bool with_energy) {
+                            bool with_energy, const StressTracking* stress) {
   std::fill(f_int, f_int + model.num_dofs(), 0.0);
   ForceTotals t;
+  // kStress: 0 = no stresses, else 1 + the measure, so that each measure's kernel is its own.
+  auto run = [&]<bool kEnergy>() {
+    if (!stress)
+      all_blocks<kEnergy, 0>(model, u, v, f_int, stress, t);
+    else if (stress->measure == StressMeasure::pk2)
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::pk2)>(model, u, v, f_int, stress, t);
+    else if (stress->measure == StressMeasure::kirchhoff)
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::kirchhoff)>(model, u, v, f_int, stress, t);
+    else
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::cauchy)>(model, u, v, f_int, stress, t);
+  };
   if (with_energy)
-    all_blocks<true>(model, u, v, f_int, t);
+    run.template operator()<true>();
   else
-    all_blocks<false>(model, u, v, f_int, t);
+    run.template operator()<false>();
   return t;
 }
 
-void cell_von_mises(const Model& model, const double* u, double* out) {
+namespace {
+
+// Calls fn(global cell, the cell's squared von Mises equivalents: max over its integration points).
+template <class Fn>
+void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
   for (const auto& b : model.q4_hourglass)
-    for (std::size_t e = 0; e < b.conn.size(); ++e) {
-      const Mat2 F = deformation_gradient<4>(gather<4>(u, b.conn[e]), b.geom[e].dndx);
-      out[b.first_cell + e] = von_mises(b.material, F);
-    }
+    std::visit(
+        [&](const auto& mat) {
+          for (std::size_t e = 0; e < b.conn.size(); ++e) {
+            const Mat2 F = deformation_gradient<4>(gather<4>(u, b.conn[e]), b.geom[e].dndx);
+            fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+          }
+        },
+        b.material);
   for (const auto& b : model.q4_full)
-    for (std::size_t e = 0; e < b.conn.size(); ++e) {
-      const Grad4 ue = gather<4>(u, b.conn[e]);
-      double vm = 0.0;
-      for (int q = 0; q < 4; ++q)
-        vm = std::max(vm, von_mises(b.material, deformation_gradient<4>(ue, b.geom[e].dndx[q])));
-      out[b.first_cell + e] = vm;
-    }
+    std::visit(
+        [&](const auto& mat) {
+          for (std::size_t e = 0; e < b.conn.size(); ++e) {
+            const Grad4 ue = gather<4>(u, b.conn[e]);
+            VonMises2 vm2{0.0, 0.0, 0.0};
+            for (int q = 0; q < 4; ++q) {
+              const Mat2 F = deformation_gradient<4>(ue, b.geom[e].dndx[q]);
+              max_into(vm2, von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+            }
+            fn(b.first_cell + static_cast<int>(e), vm2);
+          }
+        },
+        b.material);
   for (const auto& b : model.t3)
-    for (std::size_t e = 0; e < b.conn.size(); ++e) {
-      const Mat2 F = deformation_gradient<3>(gather<3>(u, b.conn[e]), b.geom[e].dndx);
-      out[b.first_cell + e] = von_mises(b.material, F);
-    }
+    std::visit(
+        [&](const auto& mat) {
+          for (std::size_t e = 0; e < b.conn.size(); ++e) {
+            const Mat2 F = deformation_gradient<3>(gather<3>(u, b.conn[e]), b.geom[e].dndx);
+            fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+          }
+        },
+        b.material);
+}
+
+}  // namespace
+
+void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out) {
+  const int m = static_cast<int>(measure);
+  for_each_cell_stress(model, u, [&](int cell, const VonMises2& vm2) { out[cell] = std::sqrt(vm2[m]); });
+}
+
+StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress) {
+  StressPeaks p;
+  const int m = static_cast<int>(stress.measure);
+  for_each_cell_stress(model, u, [&](int cell, const VonMises2& vm2) {
+    p.add(VonMisesRatio{vm2[m], 1.0}, cell, stress.contact_cell && stress.contact_cell[cell] != 0);
+  });
+  return p;
+}
+
+VonMises2 von_mises_maxima(const Model& model, const double* u) {
+  VonMises2 m{0.0, 0.0, 0.0};
+  for_each_cell_stress(model, u, [&](int, const VonMises2& vm2) { max_into(m, vm2); });
+  for (double& x : m) x = std::sqrt(x);
+  return m;
 }
 
 }  // namespace ricochet

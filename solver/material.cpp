@@ -15,20 +15,13 @@ StVenantKirchhoff StVenantKirchhoff::make(double young, double poisson, double d
   StVenantKirchhoff m;
   m.lambda_3d = l.lambda;
   m.shear_modulus = l.shear_modulus;
+  m.e33_per_trace = -l.lambda / (l.lambda + 2.0 * l.shear_modulus);
   m.lambda = plane == PlaneMode::stress
                  ? 2.0 * l.lambda * l.shear_modulus / (l.lambda + 2.0 * l.shear_modulus)
                  : l.lambda;
   m.density = density;
   m.plane = plane;
   return m;
-}
-
-OutOfPlane StVenantKirchhoff::out_of_plane(const Mat2& F) const {
-  const double tr = 0.5 * (F.squaredNorm() - 2.0);  // tr E (in-plane)
-  if (plane == PlaneMode::strain) return {1.0, lambda_3d * tr};
-  // S33 = lambda3 (tr + E33) + 2 mu E33 = 0.
-  const double e33 = -lambda_3d * tr / (lambda_3d + 2.0 * shear_modulus);
-  return {std::sqrt(1.0 + 2.0 * e33), 0.0};
 }
 
 NeoHookean NeoHookean::make(double young, double poisson, double density, PlaneMode plane) {

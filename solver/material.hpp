@@ -41,6 +41,7 @@ struct StVenantKirchhoff {
   double shear_modulus = 0.0;  // [Pa]
   double density = 0.0;        // [kg/m^3]
   PlaneMode plane = PlaneMode::strain;
+  double e33_per_trace = 0.0;  // plane stress: E33 / tr E = -lambda3 / (lambda3 + 2 mu) [-]
 
   static StVenantKirchhoff make(double young, double poisson, double density, PlaneMode plane);
 
@@ -94,7 +95,19 @@ struct StVenantKirchhoff {
     first_piola_and_tangent(F, P, A);
     return A;
   }
-  OutOfPlane out_of_plane(const Mat2& F) const;
+  OutOfPlane out_of_plane(const Mat2& F) const {
+    const double tr = 0.5 * (F(0, 0) * F(0, 0) + F(1, 0) * F(1, 0) + F(0, 1) * F(0, 1) + F(1, 1) * F(1, 1) - 2.0);  // tr E (in-plane), in scalars
+    if (plane == PlaneMode::strain) return {1.0, lambda_3d * tr};
+    return {std::sqrt(stretch33_squared(F)), 0.0};
+  }
+  // F33^2 = 1 + 2 E33 without the square root; in plane stress S33 = lambda3 (tr + E33) +
+  // 2 mu E33 = 0 gives E33 = -lambda3 tr / (lambda3 + 2 mu).
+  double stretch33_squared(const Mat2& F) const {
+    if (plane == PlaneMode::strain) return 1.0;
+    // tr E (in-plane), in scalars (stress.hpp, squared_norm)
+    const double tr = 0.5 * (F(0, 0) * F(0, 0) + F(1, 0) * F(1, 0) + F(0, 1) * F(0, 1) + F(1, 1) * F(1, 1) - 2.0);
+    return 1.0 + 2.0 * e33_per_trace * tr;
+  }
   double wave_speed() const { return std::sqrt((lambda + 2.0 * shear_modulus) / density); }
 };
 

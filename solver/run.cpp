@@ -66,7 +66,8 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   for (;;) {
     const long n = s.step;
     const bool observe = monitor.is_monitor_step(n);
-    evaluate(model, settings.prescribed, s, observe);
+    const StressTracking* tracking = monitor.stress_tracking(n);
+    evaluate(model, settings.prescribed, s, observe, tracking);
     if (with_contact) {
       if (penalty)
         penalty_phase(model, settings.obstacles, springs, s);
@@ -77,11 +78,18 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
       break;
     }
+    if (tracking) monitor.track_stress(s, s.forces.stress);
     if (observe) {
       if (!monitor.observe(s, penalty ? report(springs) : report(contact), kinetic0)) break;
       if (progress) progress(n, planned, s.time);
     }
     if (n == planned) break;
+    if (with_contact) {
+      if (penalty)
+        monitor.contact_step(s.time, s.dt, springs.active_count, springs.normal_force, springs.tangential_force);
+      else
+        monitor.contact_step(s.time, s.dt, contact.active_count, contact.normal_force, contact.tangential_force);
+    }
     update(s);
   }
   monitor.finish(s);

@@ -2,11 +2,13 @@
 // detection, and what the run produced. Typed structs in, typed results out: no files here.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "solver/penalty_contact.hpp"
+#include "solver/stress.hpp"
 
 namespace ricochet {
 
@@ -36,6 +38,12 @@ struct RunSettings {
   // Contact between bodies, node to segment (body_contact.hpp), treated by the same method.
   std::vector<BodyPair> body_pairs;
   ContactMethod contact_method = ContactMethod::bipotential;
+  // The measure of von_mises_max, the history column and the fields; the peaks of all three
+  // are tracked at every step (stress.hpp).
+  StressMeasure stress_measure = StressMeasure::cauchy;
+  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
+  // von_mises_max then depends on the sampling interval).
+  bool stress_every_step = true;
   ContactSettings contact;
   PenaltySettings penalty;
 };
@@ -61,6 +69,16 @@ struct FieldSnapshot {
   std::vector<double> von_mises;   // per cell [Pa]
 };
 
+// Where and when a von Mises peak was reached: the largest value over every step of a run.
+struct StressPeak {
+  double value = 0.0;     // [Pa]
+  double time = 0.0;      // [s]
+  int cell = -1;          // global cell index; -1 if never reached (no cell, or zero stress)
+  int body = -1;          // index of the body
+  int element = -1;       // index of the cell within its body (its quads, then its triangles)
+  double x = 0.0, y = 0.0;  // the cell's centroid at that time (mean of its current nodes) [m]
+};
+
 struct RunResult {
   RunStatus status = RunStatus::ok;
   std::string reason;              // why a run diverged
@@ -74,8 +92,20 @@ struct RunResult {
   std::vector<FieldSnapshot> fields;
   double initial_energy = 0.0;     // E_0 [J]
   double energy_error_max = 0.0;   // over samples [-]
-  double von_mises_max = 0.0;      // over samples and cells [Pa]
+  double von_mises_max = 0.0;      // of stress_measure, over every step and cell [Pa]
   double von_mises_max_time = 0.0; // [s]
+  StressMeasure stress_measure = StressMeasure::cauchy;
+  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
+  // von_mises_max then depends on the sampling interval).
+  bool stress_every_step = true;
+  StressPeak von_mises_peak;           // of stress_measure over every step, all cells
+  StressPeak von_mises_interior_peak;  // the same over the cells off the contact boundary
+  VonMises2 von_mises_sampled_max{0.0, 0.0, 0.0};  // per measure, over the history samples [Pa]
+  double total_mass = 0.0;         // [kg]
+  double contact_impulse_normal = 0.0;      // sum over steps of normal_force * dt [N s]
+  double contact_impulse_tangential = 0.0;  // sum over steps of tangential_force * dt [N s]
+  double contact_first_time = -1.0;  // start of the first step with an active contact [s]; -1: none
+  double contact_last_time = -1.0;   // end of the last step with an active contact [s]; -1: none
   double penetration_max = 0.0;    // over samples [m]
   double friction_dissipation = 0.0;  // at the end [J]
   double contact_work = 0.0;       // at the end [J]

@@ -83,6 +83,51 @@ double angular_momentum(const Model& model, const State& s) {
   return L;
 }
 
+
+// Cells with a node on a contact boundary: the candidate nodes, and the boundary nodes of the
+// master bodies of body pairs.
+std::vector<std::uint8_t> contact_boundary_cells(const Model& model, const RunSettings& settings,
+                                                 const std::vector<ContactCandidate>* candidates) {
+  std::vector<std::uint8_t> node(model.num_nodes(), 0), cell(model.num_cells(), 0);
+  if (candidates)
+    for (const ContactCandidate& c : *candidates) node[c.node] = 1;
+  for (const BodyPair& bp : settings.body_pairs)
+    if (bp.master >= 0 && bp.master < static_cast<int>(model.bodies.size()))
+      for (int n : model.bodies[bp.master].boundary_nodes) node[n] = 1;
+  auto mark = [&](const auto& block) {
+    for (std::size_t e = 0; e < block.conn.size(); ++e)
+      for (int n : block.conn[e])
+        if (node[n]) cell[block.first_cell + e] = 1;
+  };
+  for (const auto& b : model.q4_full) mark(b);
+  for (const auto& b : model.q4_hourglass) mark(b);
+  for (const auto& b : model.t3) mark(b);
+  return cell;
+}
+
+// Body, element within the body and current centroid of a global cell.
+void locate_cell(const Model& model, const State& s, int cell, StressPeak& p) {
+  p.cell = cell;
+  auto find = [&](const auto& block) {
+    const int k = cell - block.first_cell;
+    if (k < 0 || k >= static_cast<int>(block.conn.size())) return false;
+    Vec2 c = Vec2::Zero();
+    for (int n : block.conn[k]) c += model.ref.col(n) + Vec2(s.u[2 * n], s.u[2 * n + 1]);
+    c /= static_cast<double>(block.conn[k].size());
+    p.x = c.x();
+    p.y = c.y();
+    p.body = block.body;
+    p.element = cell - model.bodies[block.body].first_cell;
+    return true;
+  };
+  for (const auto& b : model.q4_full)
+    if (find(b)) return;
+  for (const auto& b : model.q4_hourglass)
+    if (find(b)) return;
+  for (const auto& b : model.t3)
+    if (find(b)) return;
+}
+
 }  // namespace
 
 RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
@@ -104,10 +149,51 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   result.history.values.reserve(samples_.size() * result.history.columns.size());
   result.fields.reserve(field_steps_.size());
   monitor_every_ = std::max(1, settings.monitor_every);
-  cell_vm_.assign(model.num_cells(), 0.0);
+  contact_cell_ = contact_boundary_cells(model, settings, candidates_);
+  tracking_.contact_cell = contact_cell_.data();
+  tracking_.measure = settings.stress_measure;
+  result.stress_measure = settings.stress_measure;
+  result.total_mass = 0.5 * model.mass.sum();
   if (candidates_) result.contact_candidates = static_cast<int>(candidates_->size());
   wall0_ = std::chrono::steady_clock::now();
   cpu0_ = std::clock();
+}
+
+const StressTracking* RunMonitor::stress_tracking(long n) {
+  const bool sample = next_sample_ < samples_.size() && samples_[next_sample_] == n;
+  if (!sample && !settings_.stress_every_step) return nullptr;
+  const double peak = result_.von_mises_interior_peak.value;
+  tracking_.threshold = sample ? 0.0 : peak * peak;
+  return &tracking_;
+}
+
+void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
+  last_peaks_ = peaks;
+  const double all = std::sqrt(peaks.all), interior = std::sqrt(peaks.interior);
+  if (all > result_.von_mises_peak.value) {
+    StressPeak& p = result_.von_mises_peak;
+    p.value = all;
+    p.time = s.time;
+    locate_cell(model_, s, peaks.all_cell, p);
+    result_.von_mises_max = p.value;
+    result_.von_mises_max_time = p.time;
+  }
+  if (interior > result_.von_mises_interior_peak.value) {
+    StressPeak& p = result_.von_mises_interior_peak;
+    p.value = interior;
+    p.time = s.time;
+    locate_cell(model_, s, peaks.interior_cell, p);
+  }
+}
+
+void RunMonitor::contact_step(double t_begin, double dt, int active, double normal_force,
+                              double tangential_force) {
+  result_.contact_impulse_normal += normal_force * dt;
+  result_.contact_impulse_tangential += tangential_force * dt;
+  if (active > 0) {
+    if (result_.contact_first_time < 0.0) result_.contact_first_time = t_begin;
+    result_.contact_last_time = t_begin + dt;
+  }
 }
 
 bool RunMonitor::is_monitor_step(long n) const {
@@ -150,8 +236,8 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
   const double error = energy_error(balance, result_.initial_energy, reference_energy_);
 
   if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
-    cell_von_mises(model_, s.u.data(), cell_vm_.data());
-    const double vm = cell_vm_.empty() ? 0.0 : *std::max_element(cell_vm_.begin(), cell_vm_.end());
+    const double vm = std::sqrt(last_peaks_.all);
+    max_into(result_.von_mises_sampled_max, von_mises_maxima(model_, s.u.data()));
     const double depth = candidates_ ? penetration(model_, settings_.obstacles, surfaces_ ? *surfaces_ : kNoSurfaces, *candidates_, s.u) : 0.0;
     const Vec2 p = linear_momentum(model_, s);
     auto& v = result_.history.values;
@@ -167,10 +253,6 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
     }
     result_.energy_error_max = std::max(result_.energy_error_max, error);
     result_.penetration_max = std::max(result_.penetration_max, depth);
-    if (vm > result_.von_mises_max) {
-      result_.von_mises_max = vm;
-      result_.von_mises_max_time = s.time;
-    }
     ++next_sample_;
   }
   if (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) {
@@ -180,8 +262,8 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
     f.u = s.u;
     f.v.resize(s.u.size());
     for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
-    f.von_mises.resize(cell_vm_.size());
-    cell_von_mises(model_, s.u.data(), f.von_mises.data());
+    f.von_mises.resize(model_.num_cells());
+    cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
     result_.fields.push_back(std::move(f));
     ++next_field_;
   }

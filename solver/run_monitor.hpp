@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <ctime>
 #include <vector>
 
@@ -39,6 +40,20 @@ class RunMonitor {
   // `kinetic0` is the kinetic energy of the initial conditions (used at n = 0).
   bool observe(const State& s, const ContactReport& c, double kinetic0);
 
+  // What the force pass of step n ranks (internal_forces()): the run's stress measure, the
+  // cells with a node on a contact boundary (a contact candidate node, or a boundary node of a
+  // body pair's master body), and as threshold the run's interior peak so far (only a new peak
+  // matters), except at history samples, whose row holds the step's own peak (threshold 0).
+  // Null when the step needs no stresses (RunSettings::stress_every_step false, not a sample).
+  const StressTracking* stress_tracking(long n);
+
+  // Every step, before observe(): folds the peaks of the state s (t_n) into the run's maxima.
+  void track_stress(const State& s, const StressPeaks& peaks);
+
+  // Every step whose contact forces act over [t_begin, t_begin + dt]: accumulates the contact impulses
+  // and the first and last contact times. `active` is the number of active contacts.
+  void contact_step(double t_begin, double dt, int active, double normal_force, double tangential_force);
+
   // Records a divergence found by the scheme itself (e.g. det F <= 0, a failed solve).
   void diverge(const State& s, std::string reason);
 
@@ -57,7 +72,9 @@ class RunMonitor {
   Eigen::VectorXd u0_;
   double reference_energy_ = 0.0;  // max(E_0, |W_ext|): the energy-error denominator
   double input_energy_ = 0.0;      // max over time of E_0 + |W_ext|: the growth reference
-  std::vector<double> cell_vm_;
+  std::vector<std::uint8_t> contact_cell_;
+  StressTracking tracking_;
+  StressPeaks last_peaks_;  // of the last track_stress()
   std::chrono::steady_clock::time_point wall0_;
   std::clock_t cpu0_;
 };
