@@ -385,9 +385,11 @@ class Sweep {
       throw std::runtime_error(opt_.out_dir.string() + ": another sweep is running in this folder");
   }
 
+  // A run waits for its reference; a reference run (the shared reference's check run) does not:
+  // its errors are computed again when the reference finishes.
   bool startable(std::size_t i) const {
     const std::string& ref = runs_[i].reference_id;
-    return ref.empty() || recs_[index_.at(ref)].state == Record::State::done;
+    return runs_[i].is_reference || ref.empty() || recs_[index_.at(ref)].state == Record::State::done;
   }
 
   void start(Task& t) {
@@ -470,11 +472,15 @@ class Sweep {
       ++done_;
       session_wall_ += t.wall;
       ++session_runs_;
-      // A rerun reference invalidates the errors of the runs compared with it.
+      // A rerun reference invalidates the errors of the runs compared with it; a rerun shared
+      // reference or check run, the floor of every run compared with the shared reference.
       if (runs_[t.run].is_reference) {
         histories_.erase(t.run);
+        const bool shared = spec_.reference.present && (runs_[t.run].id == spec_.reference.id() ||
+                                                         runs_[t.run].id == spec_.reference.check_id());
+        if (shared) floor_.reset();
         for (std::size_t j = 0; j < runs_.size(); ++j)
-          if (runs_[j].reference_id == runs_[t.run].id) {
+          if (runs_[j].reference_id == runs_[t.run].id || (shared && runs_[j].reference_kind == "shared")) {
             recs_[j].errors_done = false;
             recs_[j].row.reset();
           }
@@ -541,12 +547,17 @@ class Sweep {
             if (seen.insert(v.key).second) l.swept.push_back(v.key);
     l.tail = {"repeats", "wall_seconds_min", "wall_seconds_max"};
     std::vector<std::string> probes;
-    for (const SweepGroup& g : spec_.groups)
-      if (!g.reference.empty() && std::find(probes.begin(), probes.end(), g.error_probe) == probes.end())
-        probes.push_back(g.error_probe);
+    for (const SweepRun& r : runs_)
+      if (!r.reference_id.empty() && std::find(probes.begin(), probes.end(), r.error_probe) == probes.end())
+        probes.push_back(r.error_probe);
     if (probes.empty()) probes.push_back("P");
     for (const auto& p : probes) l.tail.push_back("error_probe_" + p);
-    l.tail.insert(l.tail.end(), {"error_energy", "reference_run", "reference_dt"});
+    for (const auto& m : metric_names(probes.front()))
+      if (m.rfind("probe_", 0) != 0) l.tail.push_back("error_" + m);
+    l.tail.insert(l.tail.end(), {"reference_run", "reference_kind", "reference_dt", "impulse_source"});
+    if (!spec_.reference.check.empty())
+      for (const auto& m : metric_names(spec_.reference.error_probe))
+        if (has_floor(m)) l.tail.push_back("floor_" + m);
     return l;
   }
 
@@ -560,6 +571,36 @@ class Sweep {
     }
   }
 
+  // A finished run's outputs; `history` holds its history.csv if it could be read.
+  RunOutputs outputs(std::size_t i, std::optional<HistoryTable>& history) {
+    RunOutputs o;
+    const Record& rec = recs_[i];
+    if (rec.state != Record::State::done || !rec.summary) return o;
+    o.summary = &*rec.summary;
+    if (runs_[i].is_reference) {
+      o.history = reference_history(i);
+    } else {
+      try {
+        history = read_history_csv(folder(i) / "history.csv");
+        o.history = &*history;
+      } catch (const std::exception&) {
+        // No history: the history metrics stay empty.
+      }
+    }
+    return o;
+  }
+
+  // The shared reference's uncertainty: its check run's errors against it (cached), or nothing
+  // while either has not finished.
+  const std::optional<ReferenceMetrics>& floor() {
+    if (floor_ || spec_.reference.check.empty()) return floor_;
+    const std::size_t ref = index_.at(spec_.reference.id()), check = index_.at(spec_.reference.check_id());
+    std::optional<HistoryTable> h1, h2;  // unused: both are reference runs, whose histories are cached
+    const RunOutputs a = outputs(check, h1), b = outputs(ref, h2);
+    if (a.summary && b.summary) floor_ = compare_with_reference(a, b, spec_.reference.error_probe);
+    return floor_;
+  }
+
   void compute_errors(std::size_t i) {
     Record& rec = recs_[i];
     const SweepRun& run = runs_[i];
@@ -569,25 +610,19 @@ class Sweep {
     const std::size_t ref = index_.at(run.reference_id);
     const Record& rr = recs_[ref];
     rec.errors.push_back({"reference_run", run.reference_id});
-    if (rr.state != Record::State::done || !rr.summary) return;
-    rec.errors.push_back({"reference_dt", json_text(*rr.summary, "dt")});
+    rec.errors.push_back({"reference_kind", run.reference_kind});
+    if (rr.state == Record::State::done && rr.summary) rec.errors.push_back({"reference_dt", json_text(*rr.summary, "dt")});
     if (!rec.summary) return;
-    const HistoryTable* rh = reference_history(ref);
-    if (!rh) return;
-    double scale = json_number(*rr.summary, "initial_energy", 0.0);
-    if (!(scale > 0.0)) {
-      const int c = rh->column("total_energy");
-      scale = c >= 0 && !rh->rows.empty() ? std::abs(rh->rows.front()[static_cast<std::size_t>(c)]) : 0.0;
-    }
-    if (!(scale > 0.0) || !std::isfinite(scale)) scale = 1.0;
-    try {
-      const HistoryTable h = read_history_csv(folder(i) / "history.csv");
-      const ReferenceErrors e = reference_errors(h, *rh, run.error_probe, scale);
-      if (e.probe) rec.errors.push_back({"error_probe_" + run.error_probe, number_text(*e.probe)});
-      if (e.energy) rec.errors.push_back({"error_energy", number_text(*e.energy)});
-    } catch (const std::exception&) {
-      // No history to compare: the error columns stay empty.
-    }
+    std::optional<HistoryTable> own, theirs;
+    const RunOutputs a = outputs(i, own), b = outputs(ref, theirs);
+    const ReferenceMetrics m = compare_with_reference(a, b, run.error_probe);
+    for (const auto& [name, value] : metric_values(m, run.error_probe))
+      if (value) rec.errors.push_back({"error_" + name, number_text(*value)});
+    if (!m.impulse_source.empty()) rec.errors.push_back({"impulse_source", m.impulse_source});
+    if (run.reference_kind == "shared")
+      if (const auto& f = floor())
+        for (const auto& [name, value] : metric_values(*f, spec_.reference.error_probe))
+          if (value && has_floor(name)) rec.errors.push_back({"floor_" + name, number_text(*value)});
   }
 
   const SummaryRow& row(std::size_t i) {
@@ -633,6 +668,43 @@ class Sweep {
     write_summary_csv(opt_.out_dir / "summary.csv", rows, layout_);
   }
 
+  // sweep.json's `reference`: the shared reference, its check run and its floor; null without one.
+  Json shared_reference_json() {
+    const SweepReference& sr = spec_.reference;
+    if (!sr.present) return Json();
+    auto run_json = [&](const std::string& id) {
+      const std::size_t i = index_.at(id);
+      Json e = Json::object();
+      e["id"] = id;
+      e["base"] = runs_[i].base.string();
+      Json o = Json::array();
+      for (const auto& a : runs_[i].set_args()) o.push_back(a);
+      e["overrides"] = o;
+      e["status"] = recs_[i].state == Record::State::done ? Json(recs_[i].status) : Json();
+      return e;
+    };
+    Json j = run_json(sr.id());
+    j["name"] = sr.name;
+    j["error_probe"] = sr.error_probe;
+    if (sr.check.empty()) {
+      j["check"] = nullptr;
+      j["floor"] = nullptr;
+      return j;
+    }
+    j["check"] = run_json(sr.check_id());
+    const std::optional<ReferenceMetrics>& f = floor();
+    if (!f) {
+      j["floor"] = nullptr;
+      return j;
+    }
+    Json fl = Json::object();
+    for (const auto& [name, value] : metric_values(*f, sr.error_probe))
+      if (has_floor(name)) fl[name] = value && std::isfinite(*value) ? Json(*value) : Json();
+    fl["impulse_source"] = f->impulse_source.empty() ? Json() : Json(f->impulse_source);
+    j["floor"] = fl;
+    return j;
+  }
+
   void write_sweep_json(bool finished) {
     Json j = Json::object();
     j["ricochet_version"] = RICOCHET_VERSION;
@@ -674,8 +746,10 @@ class Sweep {
       for (const auto& k : r.swept) sw.push_back(k);
       e["swept"] = sw;
       e["reference_run"] = r.reference_id.empty() ? Json() : Json(r.reference_id);
+      e["reference_kind"] = r.reference_kind.empty() ? Json() : Json(r.reference_kind);
       list.push_back(e);
     }
+    j["reference"] = shared_reference_json();
     j["runs"] = list;
     write_file_atomic(opt_.out_dir / "sweep.json", j.dump());
   }
@@ -686,6 +760,7 @@ class Sweep {
   std::vector<Record> recs_;
   std::map<std::string, std::size_t> index_;
   std::map<std::size_t, HistoryTable> histories_;  // reference histories, by run index
+  std::optional<ReferenceMetrics> floor_;          // the shared reference's check against it
   std::ostream* log_ = nullptr;
   fs::path exe_;
   std::map<fs::path, std::string> base_hash_;  // FNV-1a of each base case's text
@@ -813,95 +888,6 @@ void write_summary_csv(const fs::path& path, const std::vector<SummaryRow>& rows
   write_file_atomic(path, format_summary_csv(rows, layout));
 }
 
-int HistoryTable::column(std::string_view name) const {
-  for (std::size_t i = 0; i < columns.size(); ++i)
-    if (columns[i] == name) return static_cast<int>(i);
-  return -1;
-}
-
-HistoryTable read_history_csv(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot read");
-  HistoryTable h;
-  auto split = [](const std::string& line) {
-    std::vector<std::string> f;
-    std::string cur;
-    for (char c : line) {
-      if (c == ',') {
-        f.push_back(cur);
-        cur.clear();
-      } else if (c != '\r') {
-        cur += c;
-      }
-    }
-    f.push_back(cur);
-    return f;
-  };
-  std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error(path.string() + ": empty file");
-  h.columns = split(line);
-  for (std::size_t n = 2; std::getline(in, line); ++n) {
-    if (line.empty()) continue;
-    const auto f = split(line);
-    if (f.size() != h.columns.size())
-      throw std::runtime_error(path.string() + ":" + std::to_string(n) + ": " + std::to_string(f.size()) +
-                               " fields; the header has " + std::to_string(h.columns.size()));
-    std::vector<double> row;
-    for (const auto& s : f) {
-      char* end = nullptr;
-      const double x = std::strtod(s.c_str(), &end);
-      if (s.empty() || *end != '\0') throw std::runtime_error(path.string() + ":" + std::to_string(n) + ": not a number: '" + s + "'");
-      row.push_back(x);
-    }
-    h.rows.push_back(std::move(row));
-  }
-  return h;
-}
-
-ReferenceErrors reference_errors(const HistoryTable& run, const HistoryTable& ref, const std::string& probe,
-                                 double energy_scale) {
-  ReferenceErrors e;
-  const int t_run = run.column("time"), t_ref = ref.column("time");
-  if (t_run < 0 || t_ref < 0 || ref.rows.empty()) return e;
-  const int e_run = run.column("total_energy"), e_ref = ref.column("total_energy");
-  const int ux_run = run.column(probe + "_ux"), uy_run = run.column(probe + "_uy");
-  const int ux_ref = ref.column(probe + "_ux"), uy_ref = ref.column(probe + "_uy");
-  const bool has_probe = ux_run >= 0 && uy_run >= 0 && ux_ref >= 0 && uy_ref >= 0;
-  const bool has_energy = e_run >= 0 && e_ref >= 0;
-
-  auto at = [](const std::vector<double>& row, int c) { return row[static_cast<std::size_t>(c)]; };
-  const double t0 = at(ref.rows.front(), t_ref), t1 = at(ref.rows.back(), t_ref);
-  const double slack = 1e-9 * std::max(std::abs(t1 - t0), std::abs(t1));
-  double probe_max = 0.0, energy_max = 0.0;
-  auto worse = [](double& m, double d) {
-    if (!std::isfinite(d)) d = std::numeric_limits<double>::infinity();
-    m = std::max(m, d);
-  };
-  for (const auto& row : run.rows) {
-    double t = at(row, t_run);
-    if (t < t0 - slack || t > t1 + slack) continue;
-    t = std::clamp(t, t0, t1);
-    // The reference rows j, j+1 around t (times ascending).
-    const auto it = std::lower_bound(ref.rows.begin(), ref.rows.end(), t,
-                                     [&](const std::vector<double>& r, double x) { return at(r, t_ref) < x; });
-    std::size_t j = static_cast<std::size_t>(it - ref.rows.begin());
-    auto value = [&](int c) {
-      if (j < ref.rows.size() && at(ref.rows[j], t_ref) == t) return at(ref.rows[j], c);
-      const auto& a = ref.rows[j - 1];
-      const auto& b = ref.rows[j];
-      const double w = (t - at(a, t_ref)) / (at(b, t_ref) - at(a, t_ref));
-      return at(a, c) + w * (at(b, c) - at(a, c));
-    };
-    ++e.samples;
-    if (has_probe) worse(probe_max, std::hypot(at(row, ux_run) - value(ux_ref), at(row, uy_run) - value(uy_ref)));
-    if (has_energy) worse(energy_max, std::abs(at(row, e_run) - value(e_ref)) / energy_scale);
-  }
-  if (e.samples == 0) return e;
-  if (has_probe) e.probe = probe_max;
-  if (has_energy) e.energy = energy_max;
-  return e;
-}
-
 void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs) {
   std::map<std::string, const SweepGroup*> groups;
   for (const SweepGroup& g : spec.groups) groups[g.name] = &g;
@@ -930,8 +916,10 @@ void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs) {
       }
       if (!found) {
         const SweepGroup* g = groups.count(r.group) ? groups.at(r.group) : nullptr;
-        throw InputError((g ? g->where : spec.file) + ".error_probe: the case of run " + r.id + " has no probe \"" +
-                         r.error_probe + "\"; its probes: " + (names.empty() ? "none" : names));
+        const bool shared = r.reference_kind == "shared" || (spec.reference.present && r.id == spec.reference.id());
+        const std::string where = shared ? spec.reference.where : g ? g->where : spec.file;
+        throw InputError(where + ".error_probe: the case of run " + r.id + " has no probe \"" + r.error_probe +
+                         "\"; its probes: " + (names.empty() ? "none" : names));
       }
     }
   }

@@ -1,8 +1,9 @@
 // `ricochet sweep SWEEP.toml`: runs every case of an expanded sweep (harness/sweep_spec.hpp) as a
 // subprocess `ricochet run`, one at a time (clean timings) or N in parallel, resumes an
-// interrupted sweep, repeats runs for timing statistics, measures each run's error against a
-// reference run, and keeps DIR/summary.csv, a complete table of the finished runs, up to date
-// after every run. Formats and keys: docs/sweeps.md.
+// interrupted sweep, repeats runs for timing statistics, measures each run's errors against a
+// reference run (harness/reference_errors.hpp: the sweep's shared [reference] or its group's own),
+// and keeps DIR/summary.csv, a complete table of the finished runs, up to date after every run.
+// Formats and keys: docs/sweeps.md.
 #pragma once
 
 #include <cstddef>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "harness/json_reader.hpp"
+#include "harness/reference_errors.hpp"
 #include "harness/sweep_spec.hpp"
 
 namespace ricochet {
@@ -46,8 +48,9 @@ struct SweepOutcome {
   std::size_t ok = 0, diverged = 0, failed = 0;  // over all runs
 };
 
-// Validates every run's case (read_case of the run's base with its overrides) and each
-// reference group's error probe. Throws InputError "SWEEP: run ID: <the case's one-line error>".
+// Validates every run's case (read_case of the run's base with its overrides) and, for every run
+// compared with a reference (and every reference run), its error probe. Throws InputError
+// "SWEEP:LINE: KEY: run ID: <the case's one-line error>".
 void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs);
 
 // Runs a sweep: check_runs first (nothing is written on bad input), then the runs, writing
@@ -91,29 +94,5 @@ std::string format_summary_csv(const std::vector<SummaryRow>& rows, const Summar
 // format_summary_csv written with write_file_atomic.
 void write_summary_csv(const std::filesystem::path& path, const std::vector<SummaryRow>& rows,
                        const SummaryLayout& layout);
-
-// --- accuracy against a reference run ---------------------------------------------------------
-
-struct HistoryTable {
-  std::vector<std::string> columns;
-  std::vector<std::vector<double>> rows;
-  int column(std::string_view name) const;  // index, or -1
-};
-
-// Reads a history.csv (docs/outputs.md). Throws std::runtime_error naming the file.
-HistoryTable read_history_csv(const std::filesystem::path& path);
-
-struct ReferenceErrors {
-  std::optional<double> probe;   // max |u_P - u_P,ref| over the samples [m]
-  std::optional<double> energy;  // max |E_total - E_total,ref| / energy_scale [-]
-  std::size_t samples = 0;       // run samples compared
-};
-
-// Compares `run` with `ref` at the run's sample times, the reference interpolated linearly in
-// time. Samples outside the reference's time span are skipped. `probe` names the columns
-// <probe>_ux, <probe>_uy; without them (in either history) `probe` stays empty. A non-finite
-// difference gives +inf.
-ReferenceErrors reference_errors(const HistoryTable& run, const HistoryTable& ref, const std::string& probe,
-                                 double energy_scale);
 
 }  // namespace ricochet

@@ -181,8 +181,8 @@ std::vector<SweepAxis> read_cross(const std::string& file, const TableReader& pa
 // The optional `base` of a table (the sweep's or a group's): a case file, resolved against the
 // sweep file's folder so that a sweep runs the same from any working directory; empty if absent.
 fs::path read_base(const std::string& file, const TableReader& r) {
+  fs::path p = r.text("base", std::string());  // marks `base` as allowed for finish()'s message
   if (!r.has("base")) return {};
-  fs::path p = r.text("base");
   if (p.is_relative()) p = fs::path(file).parent_path() / p;
   p = p.lexically_normal();
   if (!fs::is_regular_file(p)) r.fail("base", "case file '" + p.string() + "' not found");
@@ -224,6 +224,47 @@ std::string index3(std::size_t i) {
   char buf[24];
   std::snprintf(buf, sizeof buf, "%03zu", i);
   return buf;
+}
+
+// The top-level [reference] table (the sweep's `base` and `set` already read).
+SweepReference read_reference(const std::string& file, const TableReader& root, const toml::table& doc,
+                              const SweepSpec& s) {
+  SweepReference ref;
+  const auto r = root.table("reference");
+  if (!r) return ref;
+  ref.present = true;
+  const toml::table& t = *doc.get("reference")->as_table();
+  const auto line = t.source().begin.line;
+  ref.where = file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": reference";
+  ref.name = r->text("name", ref.name);
+  if (!valid_name(ref.name))
+    r->fail("name", "\"" + ref.name + "\": allowed: letters, digits, '_', '-', '.' (not first); at most 64 characters");
+  ref.base = read_base(file, *r);
+  if (ref.base.empty() && s.base.empty())
+    r->fail("base", "missing: the sweep has no top-level `base`, so [reference] must name its own case file");
+  ref.set = read_values(file, *r, t, "set");
+  if (ref.set.empty())
+    r->fail("set", std::string(r->has("set") ? "empty table" : "missing") +
+                       ": give the case keys of the reference run, e.g. set = { mesh = \"M2\", \"time.dt\" = 1e-7 }");
+  ref.check = read_values(file, *r, t, "check");
+  if (r->has("check")) {
+    if (ref.check.empty())
+      r->fail("check", "empty table; give the case keys in which the check run differs from the reference, "
+                       "e.g. check = { scheme = \"implicit\" }");
+    std::vector<SweepValue> merged = s.set;
+    merge(merged, ref.set);
+    const bool changes = std::any_of(ref.check.begin(), ref.check.end(), [&](const SweepValue& v) {
+      return std::none_of(merged.begin(), merged.end(),
+                          [&](const SweepValue& o) { return o.key == v.key && o.toml == v.toml; });
+    });
+    if (!changes)
+      r->fail("check", "the check run would be the reference run itself: each of its values is already the reference's");
+  }
+  ref.error_probe = r->text("error_probe", ref.error_probe);
+  if (!is_bare_key(ref.error_probe) || ref.error_probe.find('-') != std::string::npos)
+    r->fail("error_probe", "\"" + ref.error_probe + "\": a probe name is letters, digits and '_'");
+  r->finish();
+  return ref;
 }
 
 }  // namespace
@@ -305,6 +346,7 @@ SweepSpec read_sweep(const std::string& file) {
   s.description = root.text("description", "");
   s.base = read_base(file, root);
   s.set = read_values(file, root, doc, "set");
+  s.reference = read_reference(file, root, doc, s);
 
   const auto groups = root.tables("group");
   if (groups.empty()) root.fail("group", "missing: give at least one [[group]] with the lists to cross");
@@ -319,6 +361,9 @@ SweepSpec read_sweep(const std::string& file) {
     sg.name = g.text("name", "group" + std::to_string(i));
     if (!valid_name(sg.name))
       g.fail("name", "\"" + sg.name + "\": allowed: letters, digits, '_', '-', '.' (not first); at most 64 characters");
+    if (s.reference.present && sg.name == "reference")
+      g.fail("name", "\"reference\" is taken by the runs of the sweep's [reference] (reference/" + s.reference.name +
+                         "); choose another name");
     if (const auto [it, fresh] = names.emplace(sg.name, g.path()); !fresh)
       g.fail("name", "\"" + sg.name + "\" is already the name of " + it->second);
     sg.description = g.text("description", "");
@@ -327,17 +372,34 @@ SweepSpec read_sweep(const std::string& file) {
       g.fail("base", "missing: the sweep has no top-level `base`, so every group must name its own case file");
     sg.set = read_values(file, g, gt, "set");
     sg.cross = read_cross(file, g, gt);
-    sg.reference = read_values(file, g, gt, "reference");
-    if (g.has("reference") && sg.reference.empty()) g.fail("reference", "empty table; give the keys of the reference run");
+    if (const toml::node* n = gt.get("reference"); n && !n->is_table()) {
+      if (!n->is_boolean() || *n->value<bool>())
+        g.fail("reference", "expected a table of case keys (the group's own reference runs), or false (not compared "
+                            "with the sweep's [reference]); got " + (n->is_boolean() ? std::string("true") : type_name(*n)));
+      g.boolean("reference", false);
+      if (!s.reference.present) g.fail("reference", "`false` opts out of the sweep's [reference], and this sweep has none");
+      sg.reference_opt_out = true;
+    } else {
+      sg.reference = read_values(file, g, gt, "reference");
+      if (g.has("reference") && sg.reference.empty()) g.fail("reference", "empty table; give the keys of the reference run");
+    }
     sg.error_probe = g.text("error_probe", "P");
     if (!is_bare_key(sg.error_probe) || sg.error_probe.find('-') != std::string::npos)
       g.fail("error_probe", "\"" + sg.error_probe + "\": a probe name is letters, digits and '_'");
     if (g.has("error_probe") && sg.reference.empty())
-      g.fail("error_probe", "only used with `reference`; this group has none");
+      g.fail("error_probe", s.reference.present
+                                ? "only used with the group's own `reference` table; the groups compared with the "
+                                  "sweep's [reference] use its error_probe"
+                                : "only used with `reference`; this group has none");
     g.finish();
     s.groups.push_back(std::move(sg));
   }
   root.finish();
+  if (s.reference.present &&
+      std::none_of(s.groups.begin(), s.groups.end(),
+                   [](const SweepGroup& g) { return g.reference.empty() && !g.reference_opt_out; }))
+    throw InputError(s.reference.where + ": no group is compared with it: every group has its own `reference` or "
+                     "`reference = false`; remove [reference], or a group's `reference`");
   return s;
 }
 
@@ -352,10 +414,35 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
     total += n;
     if (total > kMaxRuns) break;
   }
+  if (spec.reference.present) total += spec.reference.check.empty() ? 1 : 2;
   if (total > kMaxRuns)
     throw InputError(spec.file + ": the sweep expands to more than " + std::to_string(kMaxRuns) + " runs");
 
   std::vector<SweepRun> out;
+  const SweepReference& shared = spec.reference;
+  if (shared.present) {
+    SweepRun r;
+    r.id = shared.id();
+    r.group = "reference";
+    r.base = shared.base.empty() ? spec.base : shared.base;
+    if (r.base.empty()) throw InputError(shared.where + ".base: missing, and the sweep has no top-level `base`");
+    r.is_reference = true;
+    r.overrides = spec.set;
+    merge(r.overrides, shared.set);
+    for (const SweepValue& v : shared.set) r.swept.push_back(v.key);
+    r.error_probe = shared.error_probe;
+    out.push_back(r);
+    if (!shared.check.empty()) {
+      SweepRun c = r;
+      c.id = shared.check_id();
+      merge(c.overrides, shared.check);
+      for (const SweepValue& v : shared.check)
+        if (std::find(c.swept.begin(), c.swept.end(), v.key) == c.swept.end()) c.swept.push_back(v.key);
+      c.reference_id = r.id;
+      c.reference_kind = "shared";
+      out.push_back(std::move(c));
+    }
+  }
   for (const SweepGroup& g : spec.groups) {
     const fs::path case_file = g.base.empty() ? spec.base : g.base;
     if (case_file.empty()) throw InputError(g.where + ".base: missing, and the sweep has no top-level `base`");
@@ -428,7 +515,12 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
       for (const SweepValue& v : combos[i]) r.swept.push_back(v.key);
       if (!g.reference.empty()) {
         r.reference_id = ref_of.at(signature(free_part(combos[i])));
+        r.reference_kind = "group";
         r.error_probe = g.error_probe;
+      } else if (shared.present && !g.reference_opt_out) {
+        r.reference_id = shared.id();
+        r.reference_kind = "shared";
+        r.error_probe = shared.error_probe;
       }
       out.push_back(std::move(r));
     }

@@ -32,9 +32,25 @@ struct SweepGroup {
   std::filesystem::path base;         // the group's own base case, resolved; empty = the sweep's
   std::vector<SweepValue> set;        // group overrides
   std::vector<SweepAxis> cross;       // crossed in the order written (first = outermost)
-  std::vector<SweepValue> reference;  // empty = no reference runs
-  std::string error_probe = "P";      // probe whose displacement error is measured
+  std::vector<SweepValue> reference;  // the group's own reference runs; empty = none
+  bool reference_opt_out = false;     // `reference = false`: not compared with the sweep's [reference]
+  std::string error_probe = "P";      // probe whose displacement error is measured (own reference)
   std::string where;                  // "FILE:LINE: group[N]"
+};
+
+// The sweep's shared reference, the top-level [reference] table: one run (and an optional
+// check run) that every group without its own `reference` is compared with.
+struct SweepReference {
+  bool present = false;
+  std::string name = "shared";        // run ids reference/<name> and reference/<name>-check
+  std::filesystem::path base;         // its own base case, resolved; empty = the sweep's
+  std::vector<SweepValue> set;        // its overrides, after the sweep's `set`; at least one
+  std::vector<SweepValue> check;      // the check run's overrides on top; empty = no check run
+  std::string error_probe = "P";      // probe whose displacement error is measured
+  std::string where;                  // "FILE:LINE: reference"
+
+  std::string id() const { return "reference/" + name; }
+  std::string check_id() const { return id() + "-check"; }
 };
 
 struct SweepSpec {
@@ -43,19 +59,22 @@ struct SweepSpec {
   std::string description;
   std::filesystem::path base;   // the base case file, resolved against the sweep file's folder;
                                 // empty if every group names its own
-  std::vector<SweepValue> set;  // overrides for every run
+  std::vector<SweepValue> set;  // overrides for every run, the shared reference's included
+  SweepReference reference;     // the top-level [reference], if `present`
   std::vector<SweepGroup> groups;
 };
 
 // One run of an expanded sweep.
 struct SweepRun {
-  std::string id;      // "<group>/<NNN>-<slug>", or "<group>/reference[-<slug>]"
-  std::string group;
+  std::string id;      // "<group>/<NNN>-<slug>", "<group>/reference[-<slug>]", or the shared
+                       // reference's "reference/<name>" and "reference/<name>-check"
+  std::string group;   // the group's name; "reference" for the shared reference's runs
   std::filesystem::path base;  // the run's base case: its group's own, else the sweep's
   bool is_reference = false;
   std::vector<SweepValue> overrides;  // merged: sweep set, group set, crossed values (then reference values)
   std::vector<std::string> swept;     // keys of `overrides` that come from `cross` (or `reference`)
   std::string reference_id;           // id of the run's reference run; empty if none
+  std::string reference_kind;         // "shared" (the sweep's [reference]) or "group"; empty if none
   std::string error_probe;            // probe name for the reference errors (groups with a reference)
 
   std::vector<std::string> set_args() const;  // "key=value" for read_case / ricochet run --set
@@ -67,11 +86,14 @@ struct SweepRun {
 // message "FILE:LINE: KEY: what is wrong; allowed: ...".
 SweepSpec read_sweep(const std::string& file);
 
-// The runs of a sweep, each on its group's base case (else the sweep's): for each group in
-// order, its reference runs (one per distinct combination of the crossed keys that `reference`
-// does not set, in first-seen order), then the cartesian product of its `cross` lists (the
-// first key varies slowest). Throws InputError if the sweep has more than 100000 runs, or if a
-// group has no base case (only for a spec that read_sweep did not make).
+// The runs of a sweep, each on its group's base case (else the sweep's): first the shared
+// reference run and its check run (on the reference's base, else the sweep's), then for each
+// group in order, its reference runs (one per distinct combination of the crossed keys that
+// `reference` does not set, in first-seen order), then the cartesian product of its `cross`
+// lists (the first key varies slowest). The runs of groups without their own reference (and not opted out)
+// are compared with the shared reference; the check run is compared with the reference. Throws
+// InputError if the sweep has more than 100000 runs, or if a group (or the shared reference)
+// has no base case (only for a spec that read_sweep did not make).
 std::vector<SweepRun> expand(const SweepSpec& spec);
 
 // --- pieces, exposed for tests ----------------------------------------------------------------

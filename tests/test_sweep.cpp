@@ -1,7 +1,8 @@
 // Sweeps (docs/sweeps.md): expansion of a sweep file into runs and their overrides, validation
 // with one-line errors and nothing written, summary.csv, the JSON reader, and the execution of
 // small sweeps of a tiny case with the real `ricochet` program: statuses, failures, resume,
-// repeats and errors against a reference run.
+// repeats, errors against a group's reference runs, and errors against a shared [reference]
+// with its check run (the oblique plate, shortened).
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
@@ -19,6 +20,7 @@
 
 #include "harness/input_error.hpp"
 #include "harness/json_reader.hpp"
+#include "harness/reference_errors.hpp"
 #include "harness/sweep.hpp"
 #include "harness/sweep_spec.hpp"
 
@@ -406,6 +408,10 @@ TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
       {(dir_ / "absent.toml").string(), "--out", out().string()},
       {"--out", out().string()},
       {good, "--out", out().string(), "--check", bad_gates},
+      {write("bad_ref.toml", "base = \"case.toml\"\n[reference]\nset = { \"time.dt\" = 1e-6 }\nbogus = 1\n[[group]]\n"),
+       "--out", out().string()},
+      {write("no_set.toml", "base = \"case.toml\"\n[reference]\ncheck = { \"time.dt\" = 1e-6 }\n[[group]]\n"), "--out",
+       out().string()},
   };
   for (const auto& args : cases) {
     ::testing::internal::CaptureStderr();
@@ -764,4 +770,347 @@ reference = { "time.dt" = 1e-5 }
     EXPECT_GT(num(coarse, "error_energy"), num(mid, "error_energy")) << el;
     EXPECT_LT(num(coarse, "error_probe_P"), 1e-2);  // a few % of the probe's motion at most
   }
+}
+
+// ---- the shared reference ([reference]) ----------------------------------------------------------
+
+TEST_F(SweepTest, SharedReferenceRunsComeFirstAndGroupsWithoutTheirOwnAreComparedWithIt) {
+  const SweepSpec spec = read_sweep(write("s.toml", R"(
+base = "case.toml"
+set = { "time.end" = 1e-3, "output.interval" = 1e-4 }
+
+[reference]
+name = "converged"
+set = { "time.dt" = 2.5e-6, "output.interval" = 5e-5 }
+check = { "bodies[0].element" = "q4_hourglass" }
+
+[[group]]
+name = "a"
+cross = { "time.dt" = [1e-5, 2e-5] }
+
+[[group]]
+name = "own"
+cross = { "time.dt" = [1e-5] }
+reference = { "time.dt" = 5e-6 }
+error_probe = "P"
+
+[[group]]
+name = "out"
+reference = false
+)"));
+  ASSERT_TRUE(spec.reference.present);
+  EXPECT_EQ(spec.reference.name, "converged");
+  EXPECT_EQ(spec.reference.error_probe, "P");
+  const auto runs = expand(spec);
+  EXPECT_EQ(ids(runs), (std::vector<std::string>{"reference/converged", "reference/converged-check", "a/000-time.dt=1e-5",
+                                                 "a/001-time.dt=2e-5", "own/reference-time.dt=5e-6", "own/000-time.dt=1e-5",
+                                                 "out/000"}));
+  // The sweep's set, then the reference's; the check run adds its own keys on top.
+  EXPECT_EQ(runs[0].set_args(), (std::vector<std::string>{"time.end=0.001", "time.dt=2.5e-6", "output.interval=5e-5"}));
+  EXPECT_EQ(runs[1].set_args(), (std::vector<std::string>{"time.end=0.001", "time.dt=2.5e-6", "output.interval=5e-5",
+                                                          "bodies[0].element=\"q4_hourglass\""}));
+  EXPECT_EQ(runs[0].folder(), fs::path("runs/reference/converged"));
+  EXPECT_EQ(runs[0].group, "reference");
+  EXPECT_TRUE(runs[0].is_reference);
+  EXPECT_TRUE(runs[1].is_reference);
+  EXPECT_EQ(runs[0].base, spec.base);
+  EXPECT_EQ(runs[0].reference_id, "");
+  EXPECT_EQ(runs[1].reference_id, "reference/converged");
+  EXPECT_EQ(runs[1].reference_kind, "shared");
+  for (int i : {2, 3}) {
+    EXPECT_EQ(runs[i].reference_id, "reference/converged") << runs[i].id;
+    EXPECT_EQ(runs[i].reference_kind, "shared") << runs[i].id;
+    EXPECT_EQ(runs[i].error_probe, "P");
+  }
+  EXPECT_EQ(runs[5].reference_id, "own/reference-time.dt=5e-6");
+  EXPECT_EQ(runs[5].reference_kind, "group");
+  EXPECT_EQ(runs[6].reference_id, "");  // opted out
+  EXPECT_EQ(runs[6].reference_kind, "");
+  check_runs(spec, runs);
+
+  // Defaults: name "shared", no check run; a reference on its own base case.
+  write("other.toml", other_case());
+  const SweepSpec d = read_sweep(write("s.toml", "[reference]\nbase = \"other.toml\"\nset = { \"time.dt\" = 5e-6 }\n"
+                                                 "[[group]]\nbase = \"case.toml\"\n"));
+  const auto druns = expand(d);
+  EXPECT_EQ(ids(druns), (std::vector<std::string>{"reference/shared", "group0/000"}));
+  EXPECT_EQ(druns[0].base, (dir_ / "other.toml").lexically_normal());
+  EXPECT_EQ(druns[1].reference_id, "reference/shared");
+  check_runs(d, druns);
+}
+
+TEST_F(SweepTest, BadSharedReferencesAreRejectedWithFileLineAndKey) {
+  const std::string top = "base = \"case.toml\"\n";
+  const std::string g = "[[group]]\ncross = { \"time.dt\" = [1e-5] }\n";
+  const std::string set = "set = { \"time.dt\" = 1e-6 }\n";
+  expect_rejected(top + "[reference]\n" + set + "bogus = 1\n" + g,
+                  {"sweep.toml:4: reference.bogus", "unknown key", "allowed here: base, check, error_probe, name, set"});
+  expect_rejected(top + "[reference]\ncheck = { \"time.dt\" = 2e-6 }\n" + g, {"sweep.toml:2: reference.set", "missing"});
+  expect_rejected(top + "[reference]\nset = {}\n" + g, {":3: reference.set", "empty table"});
+  expect_rejected(top + "[reference]\n" + set + "check = {}\n" + g, {":4: reference.check", "empty table"});
+  expect_rejected(top + "[reference]\n" + set + "check = { \"time.dt\" = 1e-6 }\n" + g,
+                  {":4: reference.check", "the reference run itself"});
+  expect_rejected(top + "set = { \"bodies[0].element\" = \"q4\" }\n[reference]\n" + set +
+                      "check = { \"bodies.0.element\" = \"q4\" }\n" + g,
+                  {"reference.check", "the reference run itself"});
+  expect_rejected(top + "[reference]\nname = \"a b\"\n" + set + g, {":3: reference.name", "letters"});
+  expect_rejected(top + "[reference]\nbase = \"nowhere.toml\"\n" + set + g, {"reference.base", "nowhere.toml' not found"});
+  expect_rejected("[reference]\n" + set + "[[group]]\nbase = \"case.toml\"\n", {"sweep.toml:1: reference.base", "missing"});
+  expect_rejected(top + "reference = 3\n" + g, {":2: reference", "expected a table"});
+  expect_rejected(top + "[reference]\n" + set + "error_probe = \"a-b\"\n" + g, {"reference.error_probe", "probe name"});
+  // Groups.
+  expect_rejected(top + g + "reference = true\n", {":4: group[0].reference", "or false", "got true"});
+  expect_rejected(top + g + "reference = \"yes\"\n", {"group[0].reference", "a table of case keys", "a string"});
+  expect_rejected(top + g + "reference = false\n", {"group[0].reference", "this sweep has none"});
+  expect_rejected(top + "[reference]\n" + set + g + "name = \"reference\"\n", {":6: group[0].name", "reference/shared"});
+  expect_rejected(top + "[reference]\n" + set + g + "error_probe = \"P\"\n",
+                  {"group[0].error_probe", "the group's own `reference`", "[reference]"});
+  expect_rejected(top + "[reference]\n" + set + g + "reference = false\n" + g + "reference = { \"time.dt\" = 5e-6 }\n",
+                  {"sweep.toml:2: reference", "no group is compared with it"});
+  // What the case rejects: the run and the sweep file's line.
+  expect_rejected(top + "[reference]\nset = { \"time.dtt\" = 1e-6 }\n" + g,
+                  {"sweep.toml:3: reference.set.time.dtt", "run reference/shared:", "time.dtt: unknown key"});
+  expect_rejected(top + "[reference]\n" + set + "check = { mesh = \"q\" }\n" + g,
+                  {"sweep.toml:4: reference.check.mesh", "run reference/shared-check", "no mesh named \"q\""});
+  expect_rejected(top + "[reference]\n" + set + "error_probe = \"Q\"\n" + g,
+                  {"sweep.toml:2: reference.error_probe", "run reference/shared", "no probe \"Q\"", "its probes: P"});
+}
+
+namespace {
+
+const JsonValue& at(const JsonValue& v, const std::string& key) {
+  const JsonValue* m = v.find(key);
+  if (!m) throw std::logic_error("no key " + key);
+  return *m;
+}
+
+const JsonValue* maybe(const JsonValue& v, const std::string& key) {
+  const JsonValue* m = v.find(key);
+  return m && m->is_number() ? m : nullptr;
+}
+
+double column_of(const HistoryTable& h, std::size_t row, const std::string& col) {
+  const int c = h.column(col);
+  if (c < 0) throw std::logic_error("no column " + col);
+  return h.rows.at(row).at(static_cast<std::size_t>(c));
+}
+
+double trapezoid(const HistoryTable& h, const std::string& col) {
+  double sum = 0.0;
+  for (std::size_t i = 1; i < h.rows.size(); ++i)
+    sum += 0.5 * (column_of(h, i - 1, col) + column_of(h, i, col)) * (column_of(h, i, "time") - column_of(h, i - 1, "time"));
+  return sum;
+}
+
+// The run's outputs in DIR/runs/<id>.
+struct Outputs {
+  JsonValue summary;
+  HistoryTable history;
+};
+Outputs outputs_of(const fs::path& out, const std::string& id) {
+  return {read_json_file(out / "runs" / id / "summary.json"), read_history_csv(out / "runs" / id / "history.csv")};
+}
+
+// The metrics of `run` against `ref` computed here from the two runs' files, independently of
+// harness/reference_errors.cpp, for runs sampled at the same times: name -> value, or absent
+// when an input is missing.
+std::map<std::string, double> expected_errors(const Outputs& run, const Outputs& ref, const std::string& probe) {
+  std::map<std::string, double> e;
+  EXPECT_EQ(run.history.rows.size(), ref.history.rows.size());
+  double du = 0.0, de = 0.0;
+  const double e0 = at(ref.summary, "initial_energy").number;
+  for (std::size_t i = 0; i < run.history.rows.size() && i < ref.history.rows.size(); ++i) {
+    EXPECT_DOUBLE_EQ(column_of(run.history, i, "time"), column_of(ref.history, i, "time"));
+    du = std::max(du, std::hypot(column_of(run.history, i, probe + "_ux") - column_of(ref.history, i, probe + "_ux"),
+                                 column_of(run.history, i, probe + "_uy") - column_of(ref.history, i, probe + "_uy")));
+    de = std::max(de, std::abs(column_of(run.history, i, "total_energy") - column_of(ref.history, i, "total_energy")) / e0);
+  }
+  e["probe_" + probe] = du;
+  e["energy"] = de;
+  e["angular_momentum"] = std::abs(at(at(run.summary, "final"), "angular_momentum").number -
+                                   at(at(ref.summary, "final"), "angular_momentum").number);
+  if (maybe(run.summary, "contact_impulse_normal") && maybe(ref.summary, "contact_impulse_normal") &&
+      maybe(run.summary, "contact_impulse_tangential") && maybe(ref.summary, "contact_impulse_tangential")) {
+    e["impulse_normal"] = std::abs(at(run.summary, "contact_impulse_normal").number - at(ref.summary, "contact_impulse_normal").number);
+    e["impulse_tangential"] =
+        std::abs(at(run.summary, "contact_impulse_tangential").number - at(ref.summary, "contact_impulse_tangential").number);
+  } else {
+    e["impulse_normal"] = std::abs(trapezoid(run.history, "normal_force") - trapezoid(ref.history, "normal_force"));
+    e["impulse_tangential"] = std::abs(trapezoid(run.history, "tangential_force") - trapezoid(ref.history, "tangential_force"));
+  }
+  auto velocity = [](const JsonValue& s) -> std::optional<std::pair<double, double>> {
+    if (maybe(s, "rebound_velocity_x") && maybe(s, "rebound_velocity_y"))
+      return std::pair{at(s, "rebound_velocity_x").number, at(s, "rebound_velocity_y").number};
+    if (maybe(s, "total_mass") && at(s, "total_mass").number > 0.0)
+      return std::pair{at(at(s, "final"), "momentum_x").number / at(s, "total_mass").number,
+                       at(at(s, "final"), "momentum_y").number / at(s, "total_mass").number};
+    return std::nullopt;
+  };
+  if (const auto a = velocity(run.summary), b = velocity(ref.summary); a && b)
+    e["rebound_velocity"] = std::hypot(a->first - b->first, a->second - b->second);
+  for (const auto& [metric, key] : std::vector<std::pair<std::string, std::string>>{
+           {"contact_duration", "contact_duration"},
+           {"von_mises_interior", "von_mises_interior_max"},
+           {"von_mises_interior_time", "von_mises_interior_max_time"}})
+    if (maybe(run.summary, key) && maybe(ref.summary, key))
+      e[metric] = std::abs(at(run.summary, key).number - at(ref.summary, key).number);
+  return e;
+}
+
+// Expects the row's `prefix`<metric> columns to hold `expected` (empty where it has no value).
+void expect_metrics(const std::map<std::string, std::string>& row, const std::string& prefix,
+                    const std::map<std::string, double>& expected, const std::vector<std::string>& metrics) {
+  for (const auto& m : metrics) {
+    const std::string col = prefix + m;
+    ASSERT_TRUE(row.count(col)) << col;
+    const auto it = expected.find(m);
+    if (it == expected.end()) {
+      EXPECT_EQ(row.at(col), "") << row.at("run_id") << " " << col;
+    } else {
+      ASSERT_FALSE(row.at(col).empty()) << row.at("run_id") << " " << col;
+      EXPECT_DOUBLE_EQ(std::stod(row.at(col)), it->second) << row.at("run_id") << " " << col;
+    }
+  }
+}
+
+}  // namespace
+
+TEST_F(SweepTest, SharedReferenceWithCheckRunGivesErrorsFloorsAndKinds) {
+  // The oblique plate on M1 over its first 0.5 ms (the impact), with friction so that both
+  // impulses are non-zero. The reference: the semi-explicit scheme at dt = 2.5e-6; its check, the
+  // implicit scheme at the same dt.
+  const std::string plate = std::string(RICOCHET_SOURCE_DIR) + "/cases/oblique_plate.toml";
+  const std::string sweep = "name = \"shared\"\nbase = \"" + plate + R"("
+set = { mesh = "M1", "time.end" = 5e-4, "output.fields" = [], "obstacles[0].friction" = 0.3 }
+
+[reference]
+name = "converged"
+set = { "time.dt" = 2.5e-6 }
+check = { scheme = "implicit" }
+error_probe = "top_right"
+
+[[group]]
+name = "semi"
+cross = { "time.dt" = [1e-5, 5e-6] }
+
+[[group]]
+name = "conv"
+cross = { "time.dt" = [1e-5] }
+reference = { "time.dt" = 5e-6 }
+
+[[group]]
+name = "alone"
+reference = false
+)";
+  const SweepOutcome o = run(sweep);
+  EXPECT_EQ(o.total, 7u);
+  EXPECT_EQ(o.ok, 7u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 7u);
+  EXPECT_EQ(t.rows[0].at("run_id"), "reference/converged");  // reference runs first, in the sweep's order
+  EXPECT_EQ(t.rows[1].at("run_id"), "reference/converged-check");
+  for (const char* id : {"reference/converged", "reference/converged-check"}) {
+    EXPECT_TRUE(fs::exists(out() / "runs" / id / "summary.json")) << id;
+    EXPECT_EQ(t.row(id).at("kind"), "reference");
+    EXPECT_EQ(t.row(id).at("group"), "reference");
+  }
+  EXPECT_EQ(t.row("reference/converged").at("reference_run"), "");
+  EXPECT_EQ(t.row("reference/converged").at("error_energy"), "");
+  EXPECT_EQ(t.row("reference/converged-check").at("summary.scheme"), "implicit");
+
+  // The floor: the check run against the reference, from their files.
+  const Outputs ref = outputs_of(out(), "reference/converged"), check = outputs_of(out(), "reference/converged-check");
+  const std::map<std::string, double> floor = expected_errors(check, ref, "top_right");
+  EXPECT_GT(floor.at("probe_top_right"), 0.0);
+  EXPECT_GT(floor.at("energy"), 0.0);
+  EXPECT_GT(floor.at("impulse_normal"), 0.0);
+  const std::vector<std::string> floored = {"probe_top_right",  "energy",           "rebound_velocity",
+                                            "angular_momentum", "impulse_normal",   "impulse_tangential",
+                                            "contact_duration", "von_mises_interior", "von_mises_interior_time"};
+  for (const auto& m : floored) EXPECT_TRUE(has_column(t, "floor_" + m)) << m;
+  EXPECT_FALSE(has_column(t, "floor_penetration"));  // penetration is measured against 0, not the reference
+
+  // Every run compared with the shared reference: its kind, its errors from the two runs' files,
+  // and the same floor on every row.
+  const std::string source = maybe(ref.summary, "contact_impulse_normal") ? "summary" : "history";
+  for (const char* id : {"reference/converged-check", "semi/000-time.dt=1e-5", "semi/001-time.dt=5e-6"}) {
+    const auto& r = t.row(id);
+    EXPECT_EQ(r.at("status"), "ok") << id;
+    EXPECT_EQ(r.at("reference_run"), "reference/converged") << id;
+    EXPECT_EQ(r.at("reference_kind"), "shared") << id;
+    EXPECT_EQ(r.at("reference_dt"), "2.5e-06") << id;
+    EXPECT_EQ(r.at("impulse_source"), source) << id;
+    expect_metrics(r, "error_", expected_errors(outputs_of(out(), id), ref, "top_right"), floored);
+    expect_metrics(r, "floor_", floor, floored);
+    EXPECT_EQ(r.at("error_penetration"), r.at("penetration_max")) << id;  // the run's own
+    EXPECT_EQ(r.at("error_probe_P"), "") << id;  // the shared reference's probe is top_right
+  }
+  // The coarser semi-explicit run is further from the reference in the probe and the energy.
+  EXPECT_GT(num(t.row("semi/000-time.dt=1e-5"), "error_energy"), num(t.row("semi/001-time.dt=5e-6"), "error_energy"));
+
+  // A group with its own reference keeps it, with its probe and no floor.
+  const auto& conv = t.row("conv/000-time.dt=1e-5");
+  EXPECT_EQ(conv.at("reference_run"), "conv/reference-time.dt=5e-6");
+  EXPECT_EQ(conv.at("reference_kind"), "group");
+  EXPECT_EQ(conv.at("reference_dt"), "5e-06");
+  EXPECT_FALSE(conv.at("error_probe_P").empty());
+  EXPECT_EQ(conv.at("error_probe_top_right"), "");
+  EXPECT_EQ(conv.at("error_penetration"), conv.at("penetration_max"));
+  for (const auto& m : floored) EXPECT_EQ(conv.at("floor_" + m), "") << m;
+  expect_metrics(conv, "error_",
+                 expected_errors(outputs_of(out(), "conv/000-time.dt=1e-5"), outputs_of(out(), "conv/reference-time.dt=5e-6"),
+                                 "P"),
+                 {"angular_momentum", "impulse_normal", "impulse_tangential"});
+  // Opted out: no reference, no errors.
+  const auto& alone = t.row("alone/000");
+  for (const char* c : {"reference_run", "reference_kind", "reference_dt", "error_energy", "error_penetration",
+                        "error_probe_top_right", "floor_energy"})
+    EXPECT_EQ(alone.at(c), "") << c;
+
+  // sweep.json: the reference, its check run and its floor; each run's reference kind.
+  const JsonValue s = read_json_file(out() / "sweep.json");
+  const JsonValue& sr = at(s, "reference");
+  EXPECT_EQ(at(sr, "id").text, "reference/converged");
+  EXPECT_EQ(at(sr, "name").text, "converged");
+  EXPECT_EQ(at(sr, "error_probe").text, "top_right");
+  EXPECT_EQ(at(at(sr, "check"), "id").text, "reference/converged-check");
+  EXPECT_EQ(at(at(sr, "floor"), "impulse_source").text, source);
+  for (const auto& m : {"probe_top_right", "energy", "angular_momentum", "impulse_normal"})
+    EXPECT_DOUBLE_EQ(at(at(sr, "floor"), m).number, floor.at(m)) << m;
+  const auto& list = at(s, "runs").items;
+  ASSERT_EQ(list.size(), 7u);
+  EXPECT_EQ(at(list[2], "reference_kind").text, "shared");
+  EXPECT_EQ(at(list[5], "id").text, "conv/000-time.dt=1e-5");
+  EXPECT_EQ(at(list[5], "reference_kind").text, "group");
+  EXPECT_TRUE(at(list[6], "reference_kind").is_null());
+
+  // A changed reference: only the reference and its check run again; the runs compared with it
+  // are resumed and their errors and floors measured against the new reference.
+  std::string finer = sweep;
+  finer.replace(finer.find("\"time.dt\" = 2.5e-6"), 18, "\"time.dt\" = 2e-6");
+  const SweepOutcome again = run(finer);
+  EXPECT_EQ(again.executed, 2u);
+  EXPECT_EQ(again.resumed, 5u);
+  const Table t2 = read_table(out() / "summary.csv");
+  const Outputs ref2 = outputs_of(out(), "reference/converged"), check2 = outputs_of(out(), "reference/converged-check");
+  EXPECT_EQ(at(ref2.summary, "dt").number, 2e-6);
+  const auto& semi = t2.row("semi/000-time.dt=1e-5");
+  EXPECT_EQ(semi.at("reference_dt"), "2e-06");
+  expect_metrics(semi, "error_", expected_errors(outputs_of(out(), "semi/000-time.dt=1e-5"), ref2, "top_right"), floored);
+  expect_metrics(semi, "floor_", expected_errors(check2, ref2, "top_right"), floored);
+  EXPECT_NE(semi.at("floor_energy"), t.row("semi/000-time.dt=1e-5").at("floor_energy"));
+
+  // A changed check run: it alone runs again, and every floor follows it.
+  std::string other_check = finer;
+  other_check.replace(other_check.find("check = { scheme = \"implicit\" }"), 31, "check = { \"time.dt\" = 1e-6 }");
+  const SweepOutcome third = run(other_check);
+  EXPECT_EQ(third.executed, 1u);
+  EXPECT_EQ(third.resumed, 6u);
+  const Table t3 = read_table(out() / "summary.csv");
+  const Outputs check3 = outputs_of(out(), "reference/converged-check");
+  EXPECT_EQ(at(check3.summary, "dt").number, 1e-6);
+  const std::map<std::string, double> floor3 = expected_errors(check3, ref2, "top_right");
+  for (const char* id : {"reference/converged-check", "semi/000-time.dt=1e-5", "semi/001-time.dt=5e-6"})
+    expect_metrics(t3.row(id), "floor_", floor3, floored);
+  EXPECT_NE(t3.row("semi/000-time.dt=1e-5").at("floor_energy"), semi.at("floor_energy"));
 }
