@@ -1,33 +1,40 @@
 #!/usr/bin/python3
-"""The paper report: Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside the
-paper's numbers, plus the work-precision diagram, the stability map, penetration over time and
-the runs that failed or diverged, the verification cases and the Kim–Kwak-type problem.
+"""The report of a sweep: for any sweep its runs (with the gate results), work-precision
+diagrams per error metric, each run's history and the runs that failed; for the paper's sweep
+(cases/paper_table1.toml) also Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside
+the paper's numbers, with the accuracy sweep, the stability map, penetration over time, the
+verification cases and the Kim–Kwak-type problem.
 
     /usr/bin/python3 reports/make_report.py DIR [--accuracy ACC_DIR] [--stability PATH ...]
                                                 [--verification VER_DIR] [--kim-kwak KK_DIR]
                                                 [--kim-kwak-fields FIELDS_DIR] [--out OUT]
-                                                [--no-discover]
+                                                [--max-run-plots N] [--no-discover]
 
-DIR        a finished sweep of cases/paper_table1.toml (groups table1, penalty, friction).
---accuracy a finished sweep of cases/accuracy.toml (work-precision diagram).
+DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
+           named paper_table1 or has the groups table1, penalty and friction.
+--accuracy a finished sweep of cases/accuracy.toml (the paper report's work-precision diagrams).
 --stability stability.json files, or folders searched for them (stability map).
 --verification a finished sweep of cases/verification/sweep.toml (the verification cases, each
-           against its analytic reference: report_verification.py).
---kim-kwak a finished sweep of cases/kim_kwak/sweep.toml (the Kim–Kwak-type problem's five runs
-           and its gates: report_kim_kwak.py).
+           against its analytic reference: report_verification.py). Without it, DIR itself
+           when its runs are verification cases.
+--kim-kwak a finished sweep of cases/kim_kwak/sweep.toml (the Kim–Kwak-type problem's runs
+           and its gates: report_kim_kwak.py). Without it, DIR itself when its runs are that case.
 --kim-kwak-fields a run of cases/kim_kwak/rubber_groove.toml with its fields/*.vtu (the
            deformed shapes of the Kim–Kwak-type problem).
 --out      report folder (default DIR/report).
-Without --accuracy / --stability / --verification / --kim-kwak / --kim-kwak-fields, the script
-looks for DIR/../accuracy, DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification,
-DIR/verification, DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove and DIR/rubber_groove
-(unless --no-discover). A source that is missing gives a
-"not available" section saying how to produce it, never a crash.
+--max-run-plots N  draw the histories of at most N runs (default 30).
+For the paper's sweep, without --accuracy / --stability / --verification / --kim-kwak /
+--kim-kwak-fields, the script looks for DIR/../accuracy, DIR/accuracy, DIR/../stability,
+DIR/stability, DIR/../verification, DIR/verification, DIR/../kim_kwak, DIR/kim_kwak,
+DIR/../rubber_groove and DIR/rubber_groove (unless --no-discover); a source that is missing
+gives a "not available" section saying how to produce it, never a crash. For any other sweep
+only DIR/stability is looked for, and parts without data are left out.
 
 Writes OUT/index.html (self-contained apart from its relative figure links), OUT/report.md,
 OUT/manifest.json (figures, tables and their row labels) and the figures (PNG; SVG for the
 line plots). Exit status: 0 written (even with sections not available), 2 bad input
-(DIR is not a sweep folder). docs/report.md describes every figure and its sources.
+(DIR is not a sweep folder, a bad option: one line on stderr). docs/report.md describes every
+figure and its sources.
 """
 
 import argparse
@@ -46,6 +53,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 
 import report_figures as F  # noqa: E402
+import report_generic as RG  # noqa: E402
 import report_kim_kwak as RK  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
@@ -121,6 +129,8 @@ def html_table(tid, header, rows):
         for c in r:
             bad = re.match(r"\**(diverged|failed|missing)\b", str(c))
             cls = ' class="diverged"' if bad else ""
+            if not bad and len(str(c)) <= 12 and " " not in str(c).strip():
+                cls = ' class="nw"'   # a short number or word: never broken
             cells.append(f"<td{cls}>{md_inline_to_html(str(c))}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
@@ -150,6 +160,14 @@ def ok_runs(sweep, group, **kw):
 def finest(runs):
     runs = [r for r in runs if r.dt is not None]
     return min(runs, key=lambda r: r.dt) if runs else None
+
+
+def _on_time_diff(ra, rb, col):
+    """ra[col] − rb[col], rb interpolated at ra's samples within rb's time range."""
+    ha, hb = ra.history(), rb.history()
+    t = ha["time"]
+    m = t <= hb["time"][-1] * (1 + 1e-9)
+    return ha[col][m] - np.interp(t[m], hb["time"], hb[col])
 
 
 def interp_diff(ra, rb, col):
@@ -185,13 +203,15 @@ def fmt_paper(v):
 # Sections
 
 def sec_table1(ctx):
-    s = Section("table1", "CPU time per mesh × Δt × scheme, μ = 0", "table")
+    s = Section("table1", "Wall time (time loop) per mesh × Δt × scheme, μ = 0, beside the "
+                "paper's CPU time", "table")
     s.paper = "Table 1"
     sw, ref = ctx["main"], ctx["ref"]
     cols, paper = paper_table1(ref)
     if not cols:
         cols = [(m, d) for m in ("M1", "M2") for d in (1e-4, 1e-5, 1e-6)]
-    s.header = ["scheme"] + [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]
+    s.header = ["scheme (ours: wall time, time loop)"] + \
+        [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]
     used = []
     timing = "wall_seconds"
     for scheme, label in (("semi_explicit", "Semi-explicit"), ("implicit", "Implicit")):
@@ -243,7 +263,8 @@ def sec_table1(ctx):
         "ratio table below compares the schemes on one machine. Runs (group `table1` of "
         f"{sw.dir}): " + runs_text(used) + "." + warn)
     # ratio implicit / semi-explicit, ours and paper
-    hdr = ["implicit / semi-explicit time"] + [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]
+    hdr = ["implicit / semi-explicit (ours: wall time, time loop; paper: CPU time)"] + \
+        [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]
     ours, pap = ["ours"], ["paper"]
     for k, (mesh, dt) in enumerate(cols):
         a = sw.find(group="table1", mesh=mesh, scheme="implicit", dt=dt, status="ok")
@@ -381,11 +402,16 @@ def sec_fig3(ctx):
     parts = []
     for _, r in panels:
         h = r.history()
-        e0 = h["total_energy"][0]
-        dev = np.max(np.abs(h["total_energy"] - e0)) / e0
-        parts.append(f"{scheme_name(r.scheme)}: E_t(0) = {e0:.4g} J, E_t(end) = "
-                     f"{h['total_energy'][-1]:.4g} J, largest |E_t − E_t(0)|/E_t(0) = "
-                     f"{100 * dev:.2f} %")
+        total, _ = F.energy_balance(h, r.num("initial_energy"))
+        part = (f"{scheme_name(r.scheme)}: E_t(0) = {total[0]:.4g} J, E_t(end) = "
+                f"{total[-1]:.4g} J, largest energy error "
+                f"{100 * float(np.nanmax(h['energy_error'])):.2g} %")
+        if F._nonzero(h, "contact_energy"):
+            ce = h["total_energy"]
+            dip = float(np.max(ce[0] - ce)) / ce[0]
+            part += (f" (E_c + E_e alone dips by up to {100 * dip:.1f} % of E_t(0) while "
+                     f"the springs hold up to {float(np.max(h['contact_energy'])):.3g} J)")
+        parts.append(part)
     note = ""
     if pen:
         lsd = ref.get("ls_dyna", {}).get("mean_dt")
@@ -393,15 +419,19 @@ def sec_fig3(ctx):
                 + (f" (LS-DYNA in the paper: mean {fmt_dt(lsd)} s)." if lsd else "."))
     else:
         note = f" The penalty run is missing (group `penalty`; run `{PAPER_CMD}`)."
-    s.caption = ("Kinetic E_c, elastic E_e and total E_t = E_c + E_e energy against time, "
-                 "μ = 0. " + "; ".join(parts) + "." + note +
-                 " The dotted line adds the energy held in the penalty springs. Runs: " +
+    s.caption = ("Kinetic E_c, elastic E_e and total energy E_t against time, μ = 0. In the "
+                 "penalty run the total counts the energy held in the penalty springs, "
+                 "E_t = E_c + E_e + E_pen (`contact_energy`; green), as the energy balance "
+                 "does; the grey dashed line is E_c + E_e without it. Energy error, as "
+                 "everywhere in this report: the `energy_error` column of history.csv, "
+                 "|E_c + E_e + E_hg + E_pen + D − E₀ − W_ext| / max(E₀, |W_ext|) "
+                 "(docs/outputs.md). " + "; ".join(parts) + "." + note + " Runs: " +
                  runs_text(s.runs) + ".")
     return s
 
 
 def sec_fig4(ctx):
-    s = Section("fig4", "Relative total-energy error over time", "figure")
+    s = Section("fig4", "Energy error over time", "figure")
     s.paper = "Fig. 4"
     sw, ref = ctx["main"], ctx["ref"]
     runs = ok_runs(sw, "table1")
@@ -413,16 +443,40 @@ def sec_fig4(ctx):
     by_mesh = {}
     for r in sorted(runs, key=lambda r: (r.mesh, r.scheme != "semi_explicit", -r.dt)):
         by_mesh.setdefault(r.mesh, []).append(r)
-    s.files = F.fig_energy_error(ctx["out"], "fig4_energy_error", by_mesh, bound)
+    pairs = {}
+    for m, rs in by_mesh.items():
+        for a in rs:
+            if a.scheme != "semi_explicit":
+                continue
+            b = [q for q in rs if q.scheme == "implicit" and same(q.dt, a.dt)]
+            if b:
+                pairs.setdefault(m, []).append((a, b[0]))
+    s.files = F.fig_energy_error(ctx["out"], "fig4_energy_error", by_mesh, bound, pairs)
+    # runs of one scheme and mesh on top of each other: how far apart they are
+    apart = []
+    for m, rs in by_mesh.items():
+        for scheme in ("semi_explicit", "implicit"):
+            same_s = sorted([r for r in rs if r.scheme == scheme], key=lambda r: -r.dt)
+            for a, b in zip(same_s, same_s[1:]):
+                d = 100 * np.abs(_on_time_diff(a, b, "energy_error"))
+                if d.size:
+                    apart.append(f"{scheme_name(scheme)} on {m}, Δt = {fmt_dt(a.dt)} and "
+                                 f"{fmt_dt(b.dt)} s: at most {np.max(d):.2g}, at the end "
+                                 f"{d[-1]:.2g}")
     s.runs = [r.id for rs in by_mesh.values() for r in rs]
     s.sources = [sw.dir]
     worst = max(runs, key=lambda r: r.num("energy_error_max") or 0)
     above = [r for r in runs if (r.num("energy_error_max") or 0) > bound]
     s.caption = (
-        "Relative error of the total-energy balance |E_t(t) + D(t) − E_t(0)| / E_t(0) "
-        "(`energy_error` of history.csv; D = 0 here since μ = 0) for every ok run of group "
+        "Energy error (`energy_error` of history.csv: |E_c + E_e + E_hg + E_pen + D − E₀ − "
+        "W_ext| / max(E₀, |W_ext|); here D = 0 since μ = 0, and E_hg = E_pen = W_ext = 0, so "
+        "it is the paper's |E_t(t) − E_t(0)| / E_t(0)) for every ok run of group "
         f"`table1`; dashed line: the paper's {bound * 100:g} % (\"l'erreur est le plus souvent "
-        f"inférieure à 2 %\"). Largest: {100 * worst.num('energy_error_max'):.2f} % "
+        "inférieure à 2 %\"). Bottom row: the semi-explicit run's error minus the implicit "
+        "run's at the same Δt and mesh, in percentage points. Runs of one scheme at successive "
+        "Δt (some lie on top of each other above) differ by (percentage points) "
+        + ("; ".join(apart) if apart else "–") + ". "
+        f"Largest: {100 * worst.num('energy_error_max'):.2f} % "
         f"({worst.label()}); {len(above)} of {len(runs)} runs exceed {bound * 100:g} %. "
         "Diverged runs are left out (see the failed-runs table). Runs: " + runs_text(s.runs) + ".")
     return s
@@ -449,7 +503,13 @@ def sec_probe(ctx, sid, group, mu, paper_fig):
                      f"Run `{PAPER_CMD}`.")
         return s
     stem = "fig5_P_displacement_mu0" if sid == "fig5" else "fig6_P_displacement_mu0.1"
-    s.files = F.fig_probe(ctx["out"], stem, runs, f"μ = {mu:g}")
+    refs = {}   # per mesh the implicit run, when the semi-explicit run has its Δt
+    for r, _ in runs:
+        if r.scheme == "implicit" and r.mesh not in refs and any(
+                q.scheme == "semi_explicit" and q.mesh == r.mesh and same(q.dt, r.dt)
+                for q, _ in runs):
+            refs[r.mesh] = r
+    s.files = F.fig_probe(ctx["out"], stem, runs, f"μ = {mu:g}", refs=refs)
     s.runs = [r.id for r, _ in runs]
     s.sources = [sw.dir]
     parts = []
@@ -459,15 +519,17 @@ def sec_probe(ctx, sid, group, mu, paper_fig):
             a, b = pair["semi_explicit"], pair["implicit"]
             dx = np.max(interp_diff(a, b, "P_ux"))
             dy = np.max(interp_diff(a, b, "P_uy"))
-            parts.append(f"On {mesh} the two schemes differ by at most {dx * 1e3:.3g} mm in U_x "
-                         f"and {dy * 1e3:.3g} mm in U_y")
+            parts.append(f"On {mesh} the two schemes differ by at most {dx * 1e6:.3g} µm in U_x "
+                         f"and {dy * 1e6:.3g} µm in U_y")
     r0 = runs[0][0]
     h = r0.history()
     parts.append(f"At 3 ms, {r0.label()} gives U_x = {h['P_ux'][-1] * 1e3:.3g} mm, "
                  f"U_y = {h['P_uy'][-1] * 1e3:.3g} mm")
     s.caption = (f"Horizontal U_x and vertical U_y displacement of point P (the lowest point of "
                  f"the arc, the paper does not locate P), implicit and semi-explicit, μ = {mu:g}; "
-                 "solid: M2, dashed: M1, each at its smallest Δt in the sweep. "
+                 "solid: M2, dashed: M1, each at its smallest Δt in the sweep. The curves lie on "
+                 "top of each other; the bottom row shows the semi-explicit run minus the "
+                 "implicit run of the same mesh and Δt, in µm. "
                  + ". ".join(parts) + ". Runs (group `" + group + "`): " + runs_text(s.runs)
                  + ".")
     return s
@@ -506,59 +568,23 @@ def sec_fig7(ctx):
 
 
 def sec_work_precision(ctx):
-    s = Section("work_precision", "Work-precision diagram (beyond the paper)", "figure")
+    """The paper report's work-precision diagrams: one per error metric of the accuracy sweep
+    (report_generic.wp_sections), or one "not available" section."""
     acc = ctx.get("acc")
+    s = Section("work_precision", "Work-precision diagram (beyond the paper)", "figure")
     if acc is None:
         s.available = False
         s.missing = ("no accuracy sweep. Run `" + ACC_CMD + "` and pass `--accuracy "
                      "results/accuracy` (or place it next to the paper sweep as `accuracy/`).")
         return s
-    err_col = next((c for c in acc.columns if c.startswith("error_probe_")), "error_probe_P")
-    series, used, rows, skipped = {}, [], [], []
-    for r in acc.runs:
-        if r.kind != "run":
-            continue
-        cpu, ep, ee = r.num("cpu_seconds"), r.num(err_col), r.num("error_energy")
-        if not r.ok or cpu is None or ep is None:
-            skipped.append(r)
-            continue
-        series.setdefault(r.scheme, []).append((cpu, ep, ee, r.dt))
-        used.append(r.id)
-        rows.append([f"`{r.id}`", scheme_name(r.scheme), fmt_dt(r.dt), f"{cpu:.3g}",
-                     f"{ep:.3g}", f"{ee:.3g}" if ee is not None else "–",
-                     f"`{r.get('reference_run')}`"])
-    if not series:
+    out = RG.wp_sections(ctx, acc, Section, prefix="wp",
+                         title_of=" (accuracy sweep; beyond the paper)")
+    if not out:
         s.available = False
-        s.missing = (f"the accuracy sweep {acc.dir} has no run with error columns. Run `{ACC_CMD}`.")
+        s.missing = (f"the accuracy sweep {acc.dir} has no run with an error column "
+                     f"(`error_*`). Run `{ACC_CMD}`.")
         return s
-    s.files = F.fig_work_precision(ctx["out"], "work_precision", series)
-    s.runs = used
-    s.sources = [acc.dir]
-    refs = sorted({r.get("reference_run") for r in acc.runs if r.kind == "run"} - {""})
-    orders = []
-    for scheme, pts in series.items():
-        p = [(q[3], q[1]) for q in pts if q[1] and q[1] > 0]
-        if len(p) >= 3:
-            k = np.polyfit(np.log([a for a, _ in p]), np.log([b for _, b in p]), 1)[0]
-            orders.append(f"{scheme_name(scheme)} {k:.2f}")
-    mesh = next((r.mesh for r in acc.runs if r.mesh), "?")
-    s.caption = (
-        f"Error against CPU time (`cpu_seconds`, time loop), log–log, one line per scheme, "
-        f"oblique plate on {mesh}, μ = 0; each point is one Δt (labels). Left: largest "
-        f"distance of point P from the reference run's P over the run (`{err_col}`); right: "
-        "largest total-energy difference to the reference (`error_energy`). References "
-        "(same scheme, Δt = " + ", ".join(sorted({fmt_dt(r.num('reference_dt')) for r in acc.runs
-                                                  if r.num('reference_dt')})) + " s): "
-        + runs_text(refs) + ". Each scheme is compared with its own reference, so these are "
-        "time-discretisation errors, not differences between the schemes' contact models "
-        "(the penalty scheme's penetration is in its reference too). Observed order of the P error in Δt (least squares): "
-        + (", ".join(orders) if orders else "–") + "."
-        + (f" Not drawn (not ok or no error): {runs_text(r.id for r in skipped)}." if skipped
-           else "") + f" Runs of {acc.dir}: " + runs_text(used) + ".")
-    s.extra.append(("work_precision_data", "The points of the diagram",
-                    ["run", "scheme", "Δt (s)", "CPU (s)", f"{err_col} (m)", "error_energy (–)",
-                     "reference"], rows))
-    return s
+    return out
 
 
 def _hi_reason(d):
@@ -602,12 +628,25 @@ def sec_stability(ctx):
         if k not in best or w < (best[k]["width"] if best[k]["width"] is not None else math.inf):
             best[k] = e
     sw = ctx["main"]
-    marks = [(r.mesh, r.scheme, r.dt, r.status) for r in sw.find(group="table1")
+    paper = ctx.get("paper", True)
+    marks = [(r.mesh, r.scheme, r.dt, r.status)
+             for r in (sw.find(group="table1") if paper else sw.find())
              if r.status in ("ok", "diverged") and r.dt is not None]
     marks = [m for m in marks if any(m[0] == e["mesh"] for e in best.values())]
-    cols, _ = paper_table1(ctx["ref"])
-    dts = sorted({d for _, d in cols}) or [1e-6, 1e-5, 1e-4]
-    s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts)
+    if paper:
+        cols, _ = paper_table1(ctx["ref"])
+        dts = sorted({d for _, d in cols}) or [1e-6, 1e-5, 1e-4]
+        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts)
+        marks_text = ("Small squares / black X: the Table 1 runs of the paper sweep that "
+                      "finished ok / diverged, at the paper's Δt (dotted lines). ")
+    else:
+        dts = sorted({m[2] for m in marks})
+        dts = dts if len(dts) <= 6 else []
+        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts,
+                                  dt_label="sweep Δt", mark_label="sweep run")
+        marks_text = (f"Small squares / black X: the runs of the sweep `{sw.name}` on these "
+                      "meshes and schemes that finished ok / diverged"
+                      + (", at their Δt (dotted lines). " if dts else ". "))
     s.sources = [e["path"] for e in entries]
     s.runs = [os.path.dirname(e["path"]) for e in best.values()]
     for e in sorted(entries, key=lambda e: (e["mesh"], e["scheme"])):
@@ -635,8 +674,7 @@ def sec_stability(ctx):
         "Largest stable Δt (filled circle) and smallest unstable Δt (cross) per mesh and "
         "scheme, found by bisection over whole runs, against the estimate Δt_crit = min "
         "L_e/c_p (black bar; for the penalty scheme combined with the spring limit). An arrow: "
-        "no unstable Δt up to the search cap. Small squares / black X: the Table 1 runs of the "
-        "paper sweep that finished ok / diverged, at the paper's Δt (dotted lines). The "
+        "no unstable Δt up to the search cap. " + marks_text + "The "
         "table below says why the smallest unstable Δt failed: for the explicit schemes a "
         "blow-up (inverted element or energy growth), for the implicit scheme a Newton or "
         "contact iteration that no longer converges. " + summ +
@@ -682,10 +720,22 @@ def sec_penetration(ctx):
     return s
 
 
-def sec_failed(ctx):
-    s = Section("failed", "Runs that failed or diverged (beyond the paper)", "table")
-    s.header = ["run", "sweep", "status", "Δt (s)", "Δt / estimate", "at t (s)", "reason"]
+def _sweeps(ctx):
+    """The main sweep and the other sweeps read, each once."""
+    out, seen = [], set()
     for sw in [ctx["main"]] + [ctx[k] for k in ("acc", "ver", "kk") if ctx.get(k)]:
+        if sw.dir not in seen:
+            seen.add(sw.dir)
+            out.append(sw)
+    return out
+
+
+def sec_failed(ctx):
+    paper = ctx.get("paper", True)
+    s = Section("failed", "Runs that failed or diverged" + (" (beyond the paper)" if paper
+                                                             else ""), "table")
+    s.header = ["run", "sweep", "status", "Δt (s)", "Δt / estimate", "at t (s)", "reason"]
+    for sw in _sweeps(ctx):
         for r in sw.runs:
             if r.ok:
                 continue
@@ -700,28 +750,31 @@ def sec_failed(ctx):
                  "`failed` = no usable summary.json). Δt / estimate uses the run's "
                  "`critical_dt` (min L_e/c_p). " +
                  ("None." if not s.rows else f"{len(s.rows)} run(s)."))
+    if not paper and not s.rows:
+        return []   # any other sweep: a table of nothing is left out
     return s
 
 
 def sec_runs(ctx):
-    s = Section("runs", "All runs of the paper sweep", "table")
-    sw = ctx["main"]
-    s.header = ["run", "status", "scheme", "mesh", "Δt (s)", "μ", "wall (s)", "CPU (s)",
-                "max energy error", "max von Mises (Pa)", "penetration_max (m)"]
-    for r in sw.runs:
-        s.rows.append([f"`{r.id}`", r.status, scheme_name(r.scheme), r.mesh, fmt_dt(r.dt),
-                       fmt_g(r.friction), fmt_g(r.num("wall_seconds")),
-                       fmt_g(r.num("cpu_seconds")),
-                       f"{100 * r.num('energy_error_max'):.2f} %"
-                       if r.num("energy_error_max") is not None else "–",
-                       fmt_g(r.num("von_mises_max"), 4), fmt_g(r.num("penetration_max"))])
-        s.runs.append(r.id)
-    s.sources = [sw.dir]
-    s.caption = f"summary.csv of {sw.dir}, one row per run (docs/outputs.md for the columns)."
-    return s
+    return RG.runs_section(ctx, ctx["main"], Section)
 
 
-SECTIONS = [
+def sec_histories(ctx):
+    return RG.histories_section(ctx, ctx["main"], Section)
+
+
+def sec_sweep_wp(ctx):
+    """Any sweep's own work-precision diagrams (one per error_* column), then those of an
+    accuracy sweep given with --accuracy."""
+    out = RG.wp_sections(ctx, ctx["main"], Section, prefix="wp")
+    if ctx.get("acc") is not None and ctx["acc"].dir != ctx["main"].dir:
+        out += RG.wp_sections(ctx, ctx["acc"], Section, prefix="acc_wp",
+                              title_of=f" (sweep {ctx['acc'].name})")
+    return out
+
+
+# The paper's sweep: the paper's Table 1 and Figs. 1-7 first, then what goes beyond the paper.
+PAPER_SECTIONS = [
     ("table1", sec_table1),
     ("fig1", sec_fig1),
     ("fig2", sec_fig2),
@@ -737,7 +790,27 @@ SECTIONS = [
     ("kim_kwak", lambda c: RK.sections(c, Section)),       # shapes, histories, runs table
     ("failed", sec_failed),
     ("runs", sec_runs),
+    ("histories", sec_histories),
 ]
+
+# Any other sweep: what every sweep has; the parts whose data are missing are left out.
+SWEEP_SECTIONS = [
+    ("runs", sec_runs),
+    ("failed", sec_failed),
+    ("work_precision", sec_sweep_wp),
+    ("stability", sec_stability),
+    ("verification", lambda c: RV.sections(c, Section) if c.get("ver") else []),
+    ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")
+     else []),
+    ("histories", sec_histories),
+]
+
+PAPER_GROUPS = {"table1", "penalty", "friction"}
+
+
+def is_paper_sweep(sweep):
+    """The paper's sweep (cases/paper_table1.toml): its name, or its three groups."""
+    return sweep.name == "paper_table1" or PAPER_GROUPS <= {r.group for r in sweep.runs}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -751,7 +824,7 @@ h3{font-size:1.05em} h3.sec{font-size:1.2em;margin-top:1.6em}
 .part-intro{font-size:.92em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
-th{background:#f0f0f0} td.diverged{background:#fdecea}
+th{background:#f0f0f0} td.diverged{background:#fdecea} td.nw{white-space:nowrap}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
 code{font-size:.85em;background:#f4f4f4;padding:0 .2em;word-break:break-all}
@@ -764,7 +837,7 @@ def render(ctx, sections):
     out = ctx["out"]
     meta = ctx["meta"]
     # ---- markdown
-    md = ["# Cros, Feng & Magnain (2010): our reproduction", ""]
+    md = [f"# {ctx['title']}", ""]
     for k, v in meta:
         md.append(f"- **{k}:** {v}")
     md.append("")
@@ -808,9 +881,9 @@ def render(ctx, sections):
 
     # ---- html
     h = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-         "<title>ricochet: Cros, Feng & Magnain (2010) reproduction report</title>",
+         f"<title>ricochet: {html.escape(ctx['title'])}</title>",
          f"<style>{CSS}</style></head><body>",
-         "<h1>Cros, Feng &amp; Magnain (2010): our reproduction</h1>",
+         f"<h1>{html.escape(ctx['title'])}</h1>",
          '<table class="meta">']
     for k, v in meta:
         h.append(f"<tr><td><b>{html.escape(k)}</b></td><td>{md_inline_to_html(v)}</td></tr>")
@@ -873,6 +946,7 @@ def render(ctx, sections):
 
     # ---- manifest (for tests and tools)
     man = {"generated_at": ctx["now"], "sweep": ctx["main"].dir,
+           "paper_sweep": ctx["paper"], "title": ctx["title"],
            "accuracy": ctx["acc"].dir if ctx.get("acc") else None,
            "verification": ctx["ver"].dir if ctx.get("ver") else None,
            "kim_kwak": ctx["kk"].dir if ctx.get("kk") else None,
@@ -935,9 +1009,43 @@ def kk_fields_meta(folder):
     return f"`{show_path(folder)}` ({len(field_files(fdir))} field files)"
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Bad options: one line on stderr, exit 2 (no usage block)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: {message} (--help for the options)\n")
+
+
+def read_sweep(folder, what):
+    """(Sweep, None) or (None, error text)."""
+    try:
+        return Sweep(folder), None
+    except (OSError, ValueError) as e:
+        return None, str(e)
+
+
+def generic_sources(main_sweep, args):
+    """For a sweep that is not the paper's: the sources given, else the sweep itself for the
+    verification / Kim–Kwak-type parts when its runs are those cases, and DIR/stability."""
+    cases = {r.get("case") for r in main_sweep.runs if r.kind == "run"}
+    ver_cases = {n for c in RV.CASES for n in (c.case,) + tuple(c.aliases)}
+    ver = args.verification
+    if ver is None and cases & ver_cases:
+        ver = main_sweep.dir
+    kk = args.kim_kwak
+    if kk is None and RK.CASE in cases:
+        kk = main_sweep.dir
+    stab = list(args.stability or [])
+    if not stab and not args.no_discover and os.path.isdir(os.path.join(main_sweep.dir,
+                                                                         "stability")):
+        stab = [os.path.join(main_sweep.dir, "stability")]
+    fields = os.path.abspath(args.kim_kwak_fields) if args.kim_kwak_fields else None
+    return args.accuracy, stab, ver, kk, fields
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("dir", help="paper sweep folder (cases/paper_table1.toml)")
+    ap = OneLineParser(prog="make_report.py", description=__doc__.split("\n\n")[0])
+    ap.add_argument("dir", help="a finished sweep folder (summary.csv, sweep.json, runs/)")
     ap.add_argument("--accuracy", help="accuracy sweep folder (cases/accuracy.toml)")
     ap.add_argument("--stability", nargs="*", default=None,
                     help="stability.json files or folders holding them")
@@ -948,78 +1056,111 @@ def main(argv=None):
     ap.add_argument("--kim-kwak-fields", metavar="FIELDS_DIR",
                     help="run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu")
     ap.add_argument("--out", help="report folder (default DIR/report)")
+    ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
+                    help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
     ap.add_argument("--no-discover", action="store_true",
                     help="do not look for accuracy/, stability/, verification/, kim_kwak/ and "
                          "rubber_groove/ next to DIR")
     args = ap.parse_args(argv)
-    try:
-        main_sweep = Sweep(args.dir)
-    except (OSError, ValueError) as e:
-        print(f"make_report: {e}", file=sys.stderr)
+    if args.max_run_plots < 0:
+        ap.error(f"--max-run-plots {args.max_run_plots}: must be 0 or more")
+    if not os.path.isdir(args.dir):
+        print(f"make_report: {args.dir}: no such folder (give a sweep's output folder)",
+              file=sys.stderr)
         return 2
+    main_sweep, err = read_sweep(args.dir, "sweep")
+    if main_sweep is None:
+        print(f"make_report: {err}", file=sys.stderr)
+        return 2
+    paper = is_paper_sweep(main_sweep)
     out = os.path.abspath(args.out or os.path.join(args.dir, "report"))
-    os.makedirs(out, exist_ok=True)
-    acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = discover(args.dir, args)
-    acc, acc_err = None, None
-    if acc_dir:
-        try:
-            acc = Sweep(acc_dir)
-        except (OSError, ValueError) as e:
-            acc_err = str(e)
-    ver, ver_err = None, None
-    if ver_dir:
-        try:
-            ver = Sweep(ver_dir)
-        except (OSError, ValueError) as e:
-            ver_err = str(e)
-    kk, kk_err = None, None
-    if kk_dir:
-        try:
-            kk = Sweep(kk_dir)
-        except (OSError, ValueError) as e:
-            kk_err = str(e)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as e:
+        print(f"make_report: cannot create the report folder {out}: {e.strerror}",
+              file=sys.stderr)
+        return 1
+    if paper:
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = discover(args.dir, args)
+    else:
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = generic_sources(main_sweep, args)
+    same_dir = lambda d: d is not None and os.path.abspath(d) == main_sweep.dir  # noqa: E731
+    acc, acc_err = read_sweep(acc_dir, "accuracy") if acc_dir else (None, None)
+    ver, ver_err = ((main_sweep, None) if same_dir(ver_dir) else
+                    read_sweep(ver_dir, "verification") if ver_dir else (None, None))
+    kk, kk_err = ((main_sweep, None) if same_dir(kk_dir) else
+                  read_sweep(kk_dir, "kim_kwak") if kk_dir else (None, None))
     stab_files = find_stability_files(stab_paths)
     ref = read_reference()
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    title = ("Cros, Feng & Magnain (2010): our reproduction" if paper else
+             f"Sweep {main_sweep.name}: report")
     ctx = {"main": main_sweep, "acc": acc, "stab_files": stab_files, "ref": ref, "out": out,
            "now": now, "ver": ver, "ver_err": ver_err, "kk": kk, "kk_err": kk_err,
-           "kk_fields": kk_fields}
+           "kk_fields": kk_fields, "paper": paper, "title": title,
+           "max_run_plots": args.max_run_plots}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
     builds = sorted({f"{r.get('build.compiler')} ({r.get('build.build_type')})"
                      for r in main_sweep.runs if r.get("build.compiler")})
     counts = main_sweep.meta.get("counts") or {}
-    meta = [
-        ("Paper sweep", f"`{main_sweep.dir}` (sweep `{main_sweep.name}`, file "
-                        f"`{main_sweep.meta.get('sweep_file', '?')}`, {len(main_sweep.runs)} runs: "
-                        + ", ".join(f"{k} {v}" for k, v in counts.items() if k != "executed")
-                        + f"; finished {main_sweep.meta.get('finished_at', '?')}; "
-                        f"jobs {main_sweep.meta.get('jobs', '?')}, repeat "
-                        f"{main_sweep.meta.get('repeat', '?')})"),
-        ("Accuracy sweep", f"`{acc.dir}` ({len(acc.runs)} runs)" if acc else
-         ("not available" + (f" ({acc_err})" if acc_err else "") + f": run `{ACC_CMD}`")),
-        ("Verification sweep", f"`{ver.dir}` ({len(ver.runs)} runs; references "
-                               "`reference/verification.toml`)" if ver else
-         ("not available" + (f" ({ver_err})" if ver_err else "") + f": run `{RV.VER_CMD}`")),
-        ("Kim–Kwak-type sweep", kk_meta(kk, kk_err)),
-        ("Kim–Kwak-type fields run", kk_fields_meta(kk_fields)),
-        ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
-                               if stab_files else f"not available: run `{STAB_CMD}` {STAB_MORE}")),
+    if not isinstance(counts, dict):
+        counts = {}
+    sweep_line = (f"`{main_sweep.dir}` (sweep `{main_sweep.name}`, file "
+                  f"`{main_sweep.meta.get('sweep_file', '?')}`, {len(main_sweep.runs)} runs"
+                  + (": " + ", ".join(f"{k} {v}" for k, v in counts.items() if k != "executed")
+                     if counts else "")
+                  + f"; finished {main_sweep.meta.get('finished_at', '?')}; "
+                  f"jobs {main_sweep.meta.get('jobs', '?')}, repeat "
+                  f"{main_sweep.meta.get('repeat', '?')})")
+    desc = main_sweep.meta.get("description")
+    common_tail = [
         ("Program", f"ricochet {main_sweep.version()}, `{program}`"
                     + (f", built with {'; '.join(builds)}" if builds else "")),
         ("Source tree", (f"commit `{commit}`" + (" with uncommitted changes" if dirty else "")
                          + f" (`{REPO}`, at report time)") if commit else "not a git work tree"),
-        ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & Magnain, "
-                            "C. R. Mécanique 338 (2010) 176–180)"),
-        ("Report written", now),
     ]
+    if paper:
+        meta = [
+            ("Paper sweep", sweep_line),
+            ("Accuracy sweep", f"`{acc.dir}` ({len(acc.runs)} runs)" if acc else
+             ("not available" + (f" ({acc_err})" if acc_err else "") + f": run `{ACC_CMD}`")),
+            ("Verification sweep", f"`{ver.dir}` ({len(ver.runs)} runs; references "
+                                   "`reference/verification.toml`)" if ver else
+             ("not available" + (f" ({ver_err})" if ver_err else "") + f": run `{RV.VER_CMD}`")),
+            ("Kim–Kwak-type sweep", kk_meta(kk, kk_err)),
+            ("Kim–Kwak-type fields run", kk_fields_meta(kk_fields)),
+            ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
+                                   if stab_files else
+                                   f"not available: run `{STAB_CMD}` {STAB_MORE}")),
+        ] + common_tail + [
+            ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & "
+                                "Magnain, C. R. Mécanique 338 (2010) 176–180)"),
+            ("Report written", now),
+        ]
+    else:
+        meta = [("Sweep", sweep_line)]
+        if desc:
+            meta.append(("Description", desc))
+        for label, sw, err in (("Accuracy sweep", acc, acc_err),
+                               ("Verification sweep", ver, ver_err),
+                               ("Kim–Kwak-type sweep", kk, kk_err)):
+            if sw is not None and sw is not main_sweep:
+                meta.append((label, f"`{sw.dir}` ({len(sw.runs)} runs)"))
+            elif err:
+                meta.append((label, f"could not be read ({err})"))
+        if kk_fields:
+            meta.append(("Kim–Kwak-type fields run", kk_fields_meta(kk_fields)))
+        if stab_files:
+            meta.append(("Stability results", ", ".join(f"`{show_path(p)}`" for p in stab_files)))
+        meta += common_tail + [("Report written", now)]
     ctx["meta"] = meta
 
     sections = []
     nfig = ntab = 0
     built = []
-    for sid, fn in SECTIONS:
+    for sid, fn in (PAPER_SECTIONS if paper else SWEEP_SECTIONS):
         try:
             s = fn(ctx)
         except Exception as e:  # noqa: BLE001 - a broken section must not stop the report
@@ -1027,6 +1168,9 @@ def main(argv=None):
             s.error = f"{type(e).__name__}: {e}"
             traceback.print_exc()
         built += s if isinstance(s, list) else [s]
+    if not paper:
+        # any other sweep: a part without data is left out, not shown as "not available"
+        built = [s for s in built if s.available or s.error]
     for s in built:
         if s.kind == "figure":
             nfig += 1

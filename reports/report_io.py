@@ -131,14 +131,26 @@ class Sweep:
         self.csv = os.path.join(self.dir, "summary.csv")
         if not os.path.exists(self.csv):
             raise FileNotFoundError(f"{self.csv}: no summary.csv (not a sweep folder?)")
-        with open(self.csv, newline="") as f:
-            self.rows = list(csv.DictReader(f))
-        self.columns = list(self.rows[0].keys()) if self.rows else []
+        try:
+            with open(self.csv, newline="") as f:
+                reader = csv.DictReader(f)
+                self.rows = list(reader)
+                self.columns = list(reader.fieldnames or [])
+        except (UnicodeDecodeError, csv.Error) as e:
+            raise ValueError(f"{self.csv}: not a readable CSV table ({e})") from e
+        missing = [c for c in ("run_id", "group") if c not in self.columns]
+        if missing:
+            raise ValueError(f"{self.csv}: no column {', '.join(missing)} (not a sweep's "
+                             "summary.csv; docs/sweeps.md)")
+        if any(r.get("run_id") in (None, "") for r in self.rows):
+            raise ValueError(f"{self.csv}: a row without run_id (a truncated or edited table?)")
         self.runs = [Run(self, r) for r in self.rows]
         try:
             with open(os.path.join(self.dir, "sweep.json")) as f:
                 self.meta = json.load(f)
         except (OSError, ValueError):
+            self.meta = {}
+        if not isinstance(self.meta, dict):
             self.meta = {}
 
     @property
@@ -175,19 +187,44 @@ class Sweep:
         return v or "unknown"
 
 
-def read_history(path):
-    if not os.path.exists(path):
+def read_history(path, strict=False):
+    """history.csv as a dict of numpy arrays (docs/outputs.md); None when missing or without
+    rows. A malformed file (a row of another length, a field that is not a number) gives None,
+    or with strict a ValueError naming the file and line."""
+    try:
+        f = open(path, newline="")
+    except OSError:
+        if strict and os.path.exists(path):
+            raise ValueError(f"{path}: cannot be read")
         return None
-    with open(path, newline="") as f:
-        reader = csv.reader(f)
-        try:
-            header = next(reader)
-        except StopIteration:
-            return None
-        rows = [row for row in reader if row]
+    try:
+        with f:
+            reader = csv.reader(f)
+            header = next(reader, None)
+            if not header:
+                if strict:
+                    raise ValueError(f"{path}: empty (no header line)")
+                return None
+            rows = []
+            for row in reader:
+                if not row:
+                    continue
+                if len(row) != len(header):
+                    raise ValueError(f"{path}:{reader.line_num}: {len(row)} fields, the header "
+                                     f"has {len(header)}")
+                try:
+                    rows.append([float(x) if x != "" else math.nan for x in row])
+                except ValueError:
+                    raise ValueError(f"{path}:{reader.line_num}: a field that is not a number")
+    except (ValueError, UnicodeDecodeError, csv.Error) as e:
+        if strict:
+            raise ValueError(str(e)) from None
+        return None
     if not rows:
+        if strict:
+            raise ValueError(f"{path}: no rows (a run that wrote no sample)")
         return None
-    data = np.array([[float(x) if x != "" else math.nan for x in row] for row in rows])
+    data = np.array(rows)
     return {name: data[:, i] for i, name in enumerate(header)}
 
 

@@ -210,8 +210,7 @@ def fig_shapes(outdir, stem, frames, obstacles, probes, title):
         cax = fig.add_axes([1 - 0.95 / fw, 1.0 / fh, 0.15 / fw, 1 - 1.55 / fh])
         cax.grid(False)
         cb = fig.colorbar(pc, cax=cax)
-        F._sci(cb)
-        cb.set_label("von Mises stress (Pa), cell")
+        cb.set_label(F._sci(cb) + ", cell")
     fig.suptitle(title, fontsize=10, y=1 - 0.12 / fh)
     return F.save(fig, outdir, stem, svg=False)
 

@@ -276,10 +276,16 @@ def fig_head_on(outdir, stem, runs, table, labels):
     files = F.fig_ver_contact_force(outdir, stem, ok, force, dur, p_ref,
                                     "analytic interface force for 2L/c, then 0", None,
                                     conserved=True)
+    drift = []
+    for lab, r in ok:
+        p = r.history()["momentum_x"]
+        drift.append(f"{lab} {float(np.max(np.abs(p - p[0]))):.2g}")
     return files, ("Top: the interface force (`normal_force` of history.csv), one panel per "
                    "run" + (f", against the analytic {force:g} N for {dur * 1e6:g} µs"
                             if force and dur else "") +
-                   ". Bottom: the total momentum_x, which must stay at its initial value.")
+                   ". Bottom: the change of the total momentum_x from its initial value, "
+                   "which must stay 0 (the axis spans at least ±10⁻⁶ of the initial momentum). "
+                   "Largest |p_x(t) − p_x(0)| in kg·m/s: " + ", ".join(drift) + ".")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -20,6 +20,16 @@ table has its expected rows and columns (computed here from the sweeps' summary.
 every figure's caption names its runs. The Kim–Kwak-type sections are also built with only one
 of their two sources.
 
+The report of any sweep (class SweepReport) is run on
+  (a) the verification sweep itself, cases/verification/sweep.toml with its gates;
+  (b) a two-run sweep written here from docs/sweeps.md alone (the oblique plate on M1 for 1 ms,
+      two schemes, a reference, --repeat 2), with gates checked by `ricochet check` so that one
+      run fails one gate, and a copy of it with a `floor_` column;
+and, like the paper reports, each must give an index.html whose every <img> exists and loads
+as a non-empty PNG; the paper's sections must be absent, the runs table, the gate mapping, the
+work-precision points and the run histories present. reports/plot_run.py must draw one run and
+fail with one line (exit 2) on a folder without history.csv.
+
     /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
 """
 
@@ -33,10 +43,20 @@ import subprocess
 import sys
 import tempfile
 import unittest
+import xml.etree.ElementTree as ET
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.image  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
 SCRIPT = os.path.join(REPO, "reports", "make_report.py")
+PLOT_RUN = os.path.join(REPO, "reports", "plot_run.py")
+VER_SWEEP_FILE = os.path.join(REPO, "cases", "verification", "sweep.toml")
+VER_GATES = os.path.join(REPO, "ci", "gates", "verification.toml")
+PAPER_IDS = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7", "penetration"}
 BASE = os.path.join(REPO, "cases", "oblique_plate.toml")
 VER_BASE = os.path.join(REPO, "cases", "verification", "bar_wall.toml")
 PY = sys.executable or "/usr/bin/python3"
@@ -130,6 +150,22 @@ KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
 KK_IDS = ("kk_shapes", "kk_histories", "kk_runs")
 
 
+# (b): a sweep written from docs/sweeps.md alone: two schemes on the oblique plate, each measured
+# against its own reference run at a smaller Δt (work-precision section).
+TWO_RUNS = f"""
+name = "two_runs"
+description = "report test: two schemes, oblique plate, M1, 1 ms, against a reference"
+base = "{BASE}"
+set = {{ mesh = "M1", "time.end" = 1e-3, "output.fields" = [], "output.interval" = 2e-5 }}
+
+[[group]]
+name = "schemes"
+set = {{ "time.dt" = 4e-6 }}
+cross = {{ scheme = ["semi_explicit", "explicit_penalty"] }}
+reference = {{ "time.dt" = 1e-6 }}
+"""
+
+
 def run(cmd, ok=(0,), **kw):
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
     if p.returncode not in ok:
@@ -189,9 +225,64 @@ class Tables(html.parser.HTMLParser):
             self.cell += data
 
 
+class Images(html.parser.HTMLParser):
+    """The src of every <img>, and the ids of the <section>s."""
+
+    def __init__(self):
+        super().__init__()
+        self.srcs, self.sections = [], []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.srcs.append(a.get("src"))
+        elif tag == "section" and (a.get("id") or "").startswith("sec-"):
+            self.sections.append(a["id"][4:])
+
+
+def check_images(tc, out):
+    """Every <img src> of OUT/index.html exists and loads as a non-empty, non-blank PNG.
+    Returns (page text, parser)."""
+    with open(os.path.join(out, "index.html")) as f:
+        page = f.read()
+    p = Images()
+    p.feed(page)
+    tc.assertTrue(p.srcs, out)
+    for src in p.srcs:
+        tc.assertTrue(src and src.endswith(".png"), src)
+        path = os.path.join(out, src)
+        tc.assertTrue(os.path.isfile(path), path)
+        a = matplotlib.image.imread(path)
+        tc.assertGreaterEqual(a.ndim, 2, path)
+        tc.assertGreater(min(a.shape[:2]), 50, path)
+        tc.assertGreater(float(a.std()), 0.0, f"{path} is blank")
+    return page, p
+
+
 def section_html(text, sid):
     start = text.index(f'<section id="sec-{sid}">')
     return text[start:text.index("</section>", start)]
+
+
+BG = {}   # the verification sweep of SweepReport, started first so that it runs beside the others
+
+
+def setUpModule():
+    BG["tmp"] = tempfile.mkdtemp(prefix="ricochet_report_any_")
+    BG["ver"] = os.path.join(BG["tmp"], "verification")
+    BG["ver_cmd"] = [BINARY, "sweep", VER_SWEEP_FILE, "--out", BG["ver"], "--check", VER_GATES,
+                     "--quiet"]
+    BG["ver_proc"] = subprocess.Popen(BG["ver_cmd"], stdout=subprocess.PIPE,
+                                      stderr=subprocess.PIPE, text=True)
+
+
+def tearDownModule():
+    proc = BG.get("ver_proc")
+    if proc is not None and proc.poll() is None:
+        proc.kill()
+        proc.communicate()
+    if BG.get("tmp") and not os.environ.get("KEEP_REPORT_TMP"):
+        shutil.rmtree(BG["tmp"], ignore_errors=True)
 
 
 class ReportSmoke(unittest.TestCase):
@@ -234,7 +325,7 @@ class ReportSmoke(unittest.TestCase):
             raise AssertionError(f"{' '.join(kk_cmd)}: exit {kk.returncode}\n{out}\n{err}")
         # 1: no accuracy / stability / verification / Kim–Kwak-type sources, default output
         # folder DIR/report
-        run([PY, SCRIPT, cls.paper, "--no-discover"])
+        run([PY, SCRIPT, cls.paper, "--no-discover", "--max-run-plots", "3"])
         cls.out_bare = os.path.join(cls.paper, "report")
         # 2: every source (the Kim–Kwak-type sweep discovered next to DIR)
         cls.out_full = os.path.join(t, "full_report")
@@ -271,6 +362,8 @@ class ReportSmoke(unittest.TestCase):
                 elif name.endswith(".svg"):
                     self.assertIn(b"<svg", head, path)
         self.assertGreater(os.path.getsize(os.path.join(out, "report.md")), 1000)
+        check_images(self, out)
+        self.assertTrue(man["paper_sweep"])
         return man, page
 
     def test_bare_report_says_what_is_missing(self):
@@ -295,6 +388,14 @@ class ReportSmoke(unittest.TestCase):
                 self.assertTrue(s["available"], f"{sid}: {s['missing']}")
         self.assertIsNone(man["kim_kwak"])
         self.assertIsNone(man["kim_kwak_fields"])
+        # the paper sweep's run histories, capped by --max-run-plots 3
+        with_history = [r["run_id"] for r in read_csv(os.path.join(self.paper, "summary.csv"))
+                        if os.path.isfile(os.path.join(self.paper, "runs", r["run_id"],
+                                                       "history.csv"))]
+        self.assertEqual(by_id["histories"]["runs"], with_history[:3])
+        self.assertEqual(len(by_id["histories"]["files"]), 3)
+        self.assertIn(f"Only the first 3 of {len(with_history)} runs are drawn",
+                      section_html(page, "histories"))
         with open(os.path.join(self.out_bare, "report.md")) as f:
             md = f.read()
         self.assertEqual(md.count("**Not available:**"), len(missing))
@@ -303,9 +404,14 @@ class ReportSmoke(unittest.TestCase):
         man, page = self.check_files(self.out_full)
         ver_ids = {"ver_" + c.case for c in RV.CASES}
         ver_ok = {"ver_" + c for c in VER_CASES}
+        acc = read_csv(os.path.join(self.acc, "summary.csv"))
+        metrics = [c for c in acc[0] if c.startswith("error_")
+                   and any(r[c] for r in acc if r["kind"] == "run")]
+        self.assertIn("error_probe_P", metrics)
+        wp_ids = {"wp_" + m for m in metrics}
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
-                    "work_precision", "stability", "penetration", "failed", "runs"} | ver_ids \
-            | set(KK_IDS)
+                    "stability", "penetration", "failed", "runs", "histories"} | wp_ids \
+            | ver_ids | set(KK_IDS)
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
         for sid, s in by_id.items():
@@ -325,7 +431,8 @@ class ReportSmoke(unittest.TestCase):
                           ("fig5", "fig5_P_displacement_mu0"),
                           ("fig6", "fig6_P_displacement_mu0.1"),
                           ("fig7", "fig7_friction_dissipation"),
-                          ("work_precision", "work_precision"), ("stability", "stability_map"),
+                          *((f"wp_{m}", f"work_precision_{m}") for m in metrics),
+                          ("stability", "stability_map"),
                           ("penetration", "penetration"),
                           *((f"ver_{c}", f"verification_{c}") for c in VER_CASES),
                           ("kk_shapes", "kim_kwak_shapes"),
@@ -379,9 +486,15 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(first("tab-vm_max"), ["semi-explicit", "implicit"])
         friction_ok = {r["run_id"] for r in main if r["group"] == "friction" and r["status"] == "ok"}
         self.assertEqual({r[-1] for r in tables["tab-fig7_table"]}, friction_ok)
-        acc_ok = [r["run_id"] for r in acc
-                  if r["kind"] == "run" and r["status"] == "ok" and r["error_probe_P"]]
-        self.assertEqual(first("tab-work_precision_data"), acc_ok)
+        # work-precision points: every run of the accuracy sweep, the drawn ones (ok, a
+        # positive error) first; the others say why they are not drawn
+        acc_runs = [r for r in acc if r["kind"] == "run"]
+        drawn = {r["run_id"] for r in acc_runs if r["status"] == "ok" and r["error_probe_P"]
+                 and float(r["error_probe_P"]) > 0}
+        wp = tables["tab-wp_error_probe_P_data"]
+        self.assertEqual(sorted(r[0] for r in wp), sorted(r["run_id"] for r in acc_runs))
+        self.assertEqual({r[0] for r in wp if "not drawn" not in r[6]}, drawn)
+        self.assertTrue(drawn and len(drawn) < len(acc_runs))  # the diverged run is not drawn
         self.assertEqual(len(tables["tab-stability_table"]), 2)
         self.assertEqual(first("tab-penetration_table"),
                          [r["run_id"] for r in main if r["status"] == "ok"])
@@ -471,8 +584,9 @@ class ReportSmoke(unittest.TestCase):
     def test_markdown_table1(self):
         with open(os.path.join(self.out_full, "report.md")) as f:
             md = f.read()
-        self.assertIn("| scheme | M1, Δt = 1e-4 s | M1, Δt = 1e-5 s | M1, Δt = 1e-6 s | "
-                      "M2, Δt = 1e-4 s | M2, Δt = 1e-5 s | M2, Δt = 1e-6 s |", md)
+        self.assertIn("| scheme (ours: wall time, time loop) | M1, Δt = 1e-4 s | M1, Δt = 1e-5 s "
+                      "| M1, Δt = 1e-6 s | M2, Δt = 1e-4 s | M2, Δt = 1e-5 s | M2, Δt = 1e-6 s "
+                      "|", md)
         self.assertIn("| **Semi-explicit** |", md)
         self.assertIn("| **Implicit** |", md)
         self.assertIn("## Verification cases: analytic reference against the three schemes", md)
@@ -483,6 +597,212 @@ class ReportSmoke(unittest.TestCase):
         # only the verification cases that the tiny sweep does not run are not available
         missing = len(RV.CASES) - len(VER_CASES)
         self.assertEqual(md.count("**Not available:**"), missing)
+
+class SweepReport(unittest.TestCase):
+    """make_report.py on sweeps that are not the paper's, and plot_run.py."""
+
+    @classmethod
+    def setUpClass(cls):
+        t = BG["tmp"]
+        # (b) the two-run sweep, each run twice (median and spread of the wall time)
+        with open(os.path.join(t, "two_runs.toml"), "w") as f:
+            f.write(TWO_RUNS)
+        cls.two = os.path.join(t, "two_runs")
+        run([BINARY, "sweep", os.path.join(t, "two_runs.toml"), "--out", cls.two, "--repeat",
+             "2", "--quiet"])
+        rows = read_csv(os.path.join(cls.two, "summary.csv"))
+        runs = [r for r in rows if r["kind"] == "run"]
+        assert len(runs) == 2 and all(r["status"] == "ok" for r in runs), rows
+        # gates by `ricochet check`: a limit between the two runs' energy_error_max, so that
+        # exactly one run fails it, and a count gate that passes
+        e = sorted(float(r["energy_error_max"]) for r in runs)
+        assert e[0] < e[1], e
+        cls.limit = (e[0] + e[1]) / 2
+        cls.gate_fail = "energy error below the middle"
+        with open(os.path.join(t, "gates.toml"), "w") as f:
+            f.write(f'name = "two_runs"\n\n[[gate]]\nname = "{cls.gate_fail}"\nkind = "max"\n'
+                    f'column = "energy_error_max"\nlimit = {cls.limit!r}\n'
+                    'where = { kind = "run" }\n\n[[gate]]\nname = "two ok runs"\n'
+                    'kind = "count"\nmin = 2\nwhere = { kind = "run", status = "ok" }\n')
+        run([BINARY, "check", os.path.join(cls.two, "summary.csv"), os.path.join(t, "gates.toml")],
+            ok=(4,))
+        # a copy with the reference's uncertainty: floor = 2 x the smaller probe error
+        cls.floor = os.path.join(t, "two_runs_floor")
+        os.makedirs(cls.floor)
+        shutil.copy(os.path.join(cls.two, "sweep.json"), cls.floor)
+        os.symlink(os.path.join(cls.two, "runs"), os.path.join(cls.floor, "runs"))
+        errs = [float(r["error_probe_P"]) for r in runs]
+        cls.floor_value = 2 * min(errs)
+        cols = list(rows[0]) + ["floor_error_probe_P"]
+        with open(os.path.join(cls.floor, "summary.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=cols, lineterminator="\n")
+            w.writeheader()
+            for r in rows:
+                w.writerow(dict(r, floor_error_probe_P=repr(cls.floor_value)
+                                if r["kind"] == "run" else ""))
+        cls.out_two = os.path.join(t, "report_two")
+        run([PY, SCRIPT, cls.two, "--out", cls.out_two])
+        cls.out_two1 = os.path.join(t, "report_two_capped")
+        run([PY, SCRIPT, cls.two, "--out", cls.out_two1, "--max-run-plots", "1"])
+        cls.out_floor = os.path.join(cls.floor, "report")   # the default output folder
+        run([PY, SCRIPT, cls.floor])
+        # (a) the verification sweep, started by setUpModule
+        out, err = BG["ver_proc"].communicate(timeout=300)
+        if BG["ver_proc"].returncode not in (0, 4):
+            raise AssertionError(f"{' '.join(BG['ver_cmd'])}: exit "
+                                 f"{BG['ver_proc'].returncode}\n{out}\n{err}")
+        cls.ver = BG["ver"]
+        cls.out_ver = os.path.join(t, "report_ver")
+        run([PY, SCRIPT, cls.ver, "--out", cls.out_ver])
+
+    def manifest(self, out):
+        with open(os.path.join(out, "manifest.json")) as f:
+            return json.load(f)
+
+    def tables(self, out):
+        with open(os.path.join(out, "index.html")) as f:
+            p = Tables()
+            p.feed(f.read())
+        return p
+
+    def test_images_and_sections(self):
+        """Every image loads; the paper's sections and "not available" are absent; the runs
+        table and the histories are there."""
+        for out, folder in ((self.out_ver, self.ver), (self.out_two, self.two),
+                            (self.out_two1, self.two), (self.out_floor, self.floor)):
+            page, p = check_images(self, out)
+            man = self.manifest(out)
+            self.assertFalse(man["paper_sweep"], out)
+            ids = {s["id"] for s in man["sections"]}
+            self.assertEqual(set(p.sections), ids, out)
+            self.assertFalse(ids & PAPER_IDS, out)
+            self.assertIn("runs", ids)
+            self.assertIn("histories", ids)
+            self.assertNotIn("not-available", page, out)
+            self.assertNotIn("Cros", page, out)
+            for s in man["sections"]:
+                self.assertTrue(s["available"], (out, s["id"]))
+                self.assertIsNone(s["error"], (out, s["id"]))
+            rows = read_csv(os.path.join(folder, "summary.csv"))
+            self.assertEqual([r[0] for r in self.tables(out).tables["tab-runs"]],
+                             [r["run_id"] for r in rows])
+
+    def test_histories(self):
+        rows = read_csv(os.path.join(self.two, "summary.csv"))
+        with_history = [r["run_id"] for r in rows if os.path.isfile(
+            os.path.join(self.two, "runs", r["run_id"], "history.csv"))]
+        self.assertEqual(len(with_history), 4)  # two runs, two references
+        by_id = {s["id"]: s for s in self.manifest(self.out_two)["sections"]}
+        self.assertEqual(by_id["histories"]["runs"], with_history)
+        self.assertEqual(len(by_id["histories"]["files"]), len(with_history))
+        capped = {s["id"]: s for s in self.manifest(self.out_two1)["sections"]}["histories"]
+        self.assertEqual(capped["runs"], with_history[:1])
+        with open(os.path.join(self.out_two1, "index.html")) as f:
+            self.assertIn(f"Only the first 1 of {len(with_history)} runs are drawn",
+                          section_html(f.read(), "histories"))
+
+    def test_gates_mapped_to_runs(self):
+        rows = [r for r in read_csv(os.path.join(self.two, "summary.csv"))]
+        p = self.tables(self.out_two)
+        hdr = p.headers["tab-runs"]
+        self.assertEqual(hdr[-1], "gates that failed")
+        for row in p.tables["tab-runs"]:
+            r = next(x for x in rows if x["run_id"] == row[0])
+            fails = r["kind"] == "run" and float(r["energy_error_max"]) > self.limit
+            self.assertEqual(self.gate_fail in row[-1], fails, row)
+        gates = {r[0]: r[1] for r in p.tables["tab-runs_gates"]}
+        self.assertEqual(gates, {self.gate_fail: "failed", "two ok runs": "passed"})
+        # the verification sweep: one row per JUnit test case, failed ones marked
+        root = ET.parse(os.path.join(self.ver, "gates-junit.xml")).getroot()
+        cases = {c.get("name"): c.find("failure") is not None for c in root.iter("testcase")}
+        pv = self.tables(self.out_ver)
+        got = {r[0]: r[1] == "failed" for r in pv.tables["tab-runs_gates"]}
+        self.assertEqual(got, cases)
+
+    def test_verification_part_from_the_sweep_itself(self):
+        """The verification sweep's own report has its analytic comparisons: one section per
+        case that it runs, nothing for the others."""
+        cases = {r["case"] for r in read_csv(os.path.join(self.ver, "summary.csv"))}
+        spec = {c.case for c in RV.CASES}
+        ids = {s["id"] for s in self.manifest(self.out_ver)["sections"]}
+        self.assertEqual({i for i in ids if i.startswith("ver_")},
+                         {"ver_" + c for c in cases & spec})
+        self.assertFalse({i for i in ids if i.startswith("wp_")})  # no reference runs
+
+    def test_work_precision(self):
+        rows = read_csv(os.path.join(self.two, "summary.csv"))
+        runs = [r for r in rows if r["kind"] == "run"]
+        metrics = [c for c in rows[0] if c.startswith("error_") and any(r[c] for r in runs)]
+        self.assertIn("error_probe_P", metrics)
+        man = {s["id"]: s for s in self.manifest(self.out_two)["sections"]}
+        p = self.tables(self.out_two)
+        reps = {r["repeats"] for r in runs}
+        self.assertEqual(reps, {"2"})
+        for m in metrics:
+            s = man["wp_" + m]
+            drawn = sorted(r["run_id"] for r in runs if float(r[m]) > 0)
+            self.assertEqual(sorted(s["runs"]), drawn)
+            self.assertEqual(sorted(r[0] for r in p.tables[f"tab-wp_{m}_data"]), drawn)
+            svg = os.path.join(self.out_two, f"work_precision_{m}.svg")
+            with open(svg) as f:
+                text = f.read()
+            self.assertIn("time-loop wall time [s] (median of 2 repeats)", text)
+            self.assertIn("mesh M1", text)
+            self.assertIn("Pareto front", text)
+            for r in runs:  # every point's Δt is labelled (no collisions in two points)
+                self.assertIn(r["time.dt"].replace("e-0", "e-"), text)
+
+    def test_floor(self):
+        """Points under the reference's uncertainty are flagged, the others are not."""
+        rows = [r for r in read_csv(os.path.join(self.floor, "summary.csv"))
+                if r["kind"] == "run"]
+        p = self.tables(self.out_floor)
+        hdr = p.headers["tab-wp_error_probe_P_data"]
+        self.assertIn("floor_error_probe_P [m]", hdr)
+        note = hdr.index("Pareto")
+        below = 0
+        for row in p.tables["tab-wp_error_probe_P_data"]:
+            r = next(x for x in rows if x["run_id"] == row[0])
+            is_below = float(r["error_probe_P"]) < self.floor_value
+            below += is_below
+            self.assertEqual("below the reference uncertainty" in row[note], is_below, row)
+        self.assertGreaterEqual(below, 1)
+        with open(os.path.join(self.out_floor, "work_precision_error_probe_P.svg")) as f:
+            self.assertIn("reference uncertainty", f.read())
+
+    def test_plot_run(self):
+        rid = read_csv(os.path.join(self.two, "summary.csv"))[-1]["run_id"]
+        rdir = os.path.join(self.two, "runs", rid)
+        p = run([PY, PLOT_RUN, rdir])
+        png = os.path.join(rdir, "history.png")
+        a = matplotlib.image.imread(png)
+        self.assertGreater(min(a.shape[:2]), 100)
+        self.assertGreater(float(a.std()), 0.0)
+        self.assertIn(png, p.stdout)
+        other = os.path.join(BG["tmp"], "elsewhere.png")
+        run([PY, PLOT_RUN, rdir, "--out", other])
+        self.assertGreater(float(matplotlib.image.imread(other).std()), 0.0)
+        # a folder without history.csv: exit 2, one line, nothing written
+        for bad in (self.two, os.path.join(BG["tmp"], "no_such_folder")):
+            p = run([PY, PLOT_RUN, bad], ok=(2,))
+            self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+            self.assertIn("history.csv", p.stderr)
+            self.assertNotIn("Traceback", p.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.two, "history.png")))
+
+    def test_bad_sweep_folder(self):
+        """Not a sweep folder, or a summary.csv that is not a sweep's: exit 2, one line."""
+        bad = os.path.join(BG["tmp"], "bad_sweep")
+        os.makedirs(bad, exist_ok=True)
+        p = run([PY, SCRIPT, bad], ok=(2,))
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+        with open(os.path.join(bad, "summary.csv"), "w") as f:
+            f.write("a,b\n1,2\n")
+        p = run([PY, SCRIPT, bad], ok=(2,))
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+        self.assertIn("run_id", p.stderr)
+        p = run([PY, SCRIPT, self.two, "--max-run-plots", "x"], ok=(2,))
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
 
 
 def main():
