@@ -3,8 +3,12 @@
 // Exit status: 0 run finished ok; 3 run diverged (a result, written like any other);
 // 2 bad input (one line on stderr naming file, key and what is allowed; nothing written);
 // 1 anything else (e.g. an output file could not be written).
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
 #include <iostream>
 #include <string>
 #include <unistd.h>
@@ -24,6 +28,8 @@ constexpr const char* kUsage =
     "       ricochet sweep SWEEP.toml --out DIR [--jobs N] [--repeat K] [--check GATES.toml] [--force]\n"
     "       ricochet check SUMMARY.csv GATES.toml [--junit FILE]\n"
     "       ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR]\n"
+    "       ricochet report DIR [--out OUT] [options of reports/make_report.py]\n"
+    "       ricochet plot RUN_DIR [--out PNG]\n"
     "       ricochet --version | --help\n"
     "  run       run a case; writes DIR/summary.json, DIR/history.csv, DIR/fields/*.vtu\n"
     "  --set     override a case key, e.g. --set time.dt=1e-6 --set mesh=M2\n"
@@ -31,7 +37,29 @@ constexpr const char* kUsage =
     "  --quiet   no progress and no summary line\n"
     "  sweep     run a sweep of cases (docs/sweeps.md); writes DIR/summary.csv and DIR/runs/\n"
     "  check     evaluate gate files on a sweep's summary.csv (docs/gates.md); exit 4 if a gate fails\n"
-    "  stability the largest stable time step by bisection (docs/stability.md)\n";
+    "  stability the largest stable time step by bisection (docs/stability.md)\n"
+    "  report    the HTML report of any sweep folder (docs/report.md): DIR/report/index.html\n"
+    "  plot      one PNG of a run's history (docs/report.md): RUN_DIR/history.png\n";
+
+// `ricochet report` and `ricochet plot`: the report scripts, run by Debian's Python with the
+// arguments as given (RICOCHET_PYTHON and RICOCHET_REPORTS override the interpreter and the
+// scripts' folder). Their exit status is the command's: 0 written, 2 bad input.
+int python_command(const char* script, const std::vector<std::string>& args) {
+  const char* python = std::getenv("RICOCHET_PYTHON");
+  const char* dir = std::getenv("RICOCHET_REPORTS");
+  const std::string interpreter = python && *python ? python : "/usr/bin/python3";
+  const std::string path = std::string(dir && *dir ? dir : RICOCHET_REPORTS_DIR) + "/" + script;
+  if (access(path.c_str(), R_OK) != 0)
+    throw ricochet::InputError("report script '" + path + "' not found; set RICOCHET_REPORTS to the reports/ folder");
+  std::vector<std::string> argv_s = {interpreter, path};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  execv(interpreter.c_str(), argv.data());
+  throw std::runtime_error("cannot run " + interpreter + ": " + std::strerror(errno));
+}
 
 // Progress on stderr for runs longer than a couple of seconds: in place on a terminal,
 // one line every 10 s otherwise (CI logs).
@@ -113,8 +141,10 @@ int main(int argc, char** argv) {
     if (args[0] == "sweep") return ricochet::sweep_command({args.begin() + 1, args.end()});
     if (args[0] == "check") return ricochet::check_command({args.begin() + 1, args.end()});
     if (args[0] == "stability") return ricochet::stability_command({args.begin() + 1, args.end()});
+    if (args[0] == "report") return python_command("make_report.py", {args.begin() + 1, args.end()});
+    if (args[0] == "plot") return python_command("plot_run.py", {args.begin() + 1, args.end()});
     throw ricochet::InputError("ricochet: unknown command '" + args[0] +
-                               "'; allowed: run, sweep, check, stability, --version, --help");
+                               "'; allowed: run, sweep, check, stability, report, plot, --version, --help");
   } catch (const ricochet::InputError& e) {
     std::fprintf(stderr, "ricochet: %s\n", e.what());
     return 2;

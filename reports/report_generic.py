@@ -74,11 +74,13 @@ def finite(x):
 
 
 def metric_columns(sweep):
-    """Every column of summary.csv named error_*, in table order, that holds a number in at
-    least one run (not a reference run)."""
+    """Every column of summary.csv named error_*, in table order, that holds a positive number
+    in at least one run (not a reference run). A metric that is 0 in every run (e.g. the
+    tangential impulse without friction, exactly 0 in the run and its reference) has nothing
+    to draw on a log scale."""
     out = []
     for c in sweep.columns:
-        if c.startswith("error_") and any(r.kind == "run" and r.num(c) is not None
+        if c.startswith("error_") and any(r.kind == "run" and (r.num(c) or 0) > 0
                                           for r in sweep.runs):
             out.append(c)
     return out

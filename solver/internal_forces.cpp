@@ -153,6 +153,7 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
                             bool with_energy, const StressTracking* stress) {
   std::fill(f_int, f_int + model.num_dofs(), 0.0);
   ForceTotals t;
+  if (stress) t.stress.all = t.stress.interior = stress->threshold;  // only cells above it are ranked
   // kStress: 0 = no stresses, else 1 + the measure, so that each measure's kernel is its own.
   auto run = [&]<bool kEnergy>() {
     if (!stress)

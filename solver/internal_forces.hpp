@@ -21,7 +21,8 @@ struct ForceTotals {
   double hourglass_energy = 0.0;  // stored 1/2 c q.q of stiffness-form hourglass control [J]; only when asked for
   double hourglass_power = 0.0;   // sum Q . qdot of viscous hourglass control [W]; always
   double min_jacobian = 1e300;    // smallest det F at any integration point [-]
-  StressPeaks stress;             // only when asked for (StressTracking): the cells above its threshold
+  StressPeaks stress;             // only when asked for (StressTracking): the largest values above its
+                                  // threshold (a cell index of -1: none above it)
 };
 
 // Overwrites f_int. `v` (2n) is the velocity the viscous hourglass forces use.

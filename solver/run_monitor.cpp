@@ -170,7 +170,7 @@ const StressTracking* RunMonitor::stress_tracking(long n) {
 void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
   last_peaks_ = peaks;
   const double all = std::sqrt(peaks.all), interior = std::sqrt(peaks.interior);
-  if (all > result_.von_mises_peak.value) {
+  if (peaks.all_cell >= 0 && all > result_.von_mises_peak.value) {
     StressPeak& p = result_.von_mises_peak;
     p.value = all;
     p.time = s.time;
@@ -178,7 +178,7 @@ void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
     result_.von_mises_max = p.value;
     result_.von_mises_max_time = p.time;
   }
-  if (interior > result_.von_mises_interior_peak.value) {
+  if (peaks.interior_cell >= 0 && interior > result_.von_mises_interior_peak.value) {
     StressPeak& p = result_.von_mises_interior_peak;
     p.value = interior;
     p.time = s.time;

@@ -406,7 +406,7 @@ class ReportSmoke(unittest.TestCase):
         ver_ok = {"ver_" + c for c in VER_CASES}
         acc = read_csv(os.path.join(self.acc, "summary.csv"))
         metrics = [c for c in acc[0] if c.startswith("error_")
-                   and any(r[c] for r in acc if r["kind"] == "run")]
+                   and any(r[c] and float(r[c]) > 0 for r in acc if r["kind"] == "run")]
         self.assertIn("error_probe_P", metrics)
         wp_ids = {"wp_" + m for m in metrics}
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
@@ -732,7 +732,8 @@ class SweepReport(unittest.TestCase):
     def test_work_precision(self):
         rows = read_csv(os.path.join(self.two, "summary.csv"))
         runs = [r for r in rows if r["kind"] == "run"]
-        metrics = [c for c in rows[0] if c.startswith("error_") and any(r[c] for r in runs)]
+        metrics = [c for c in rows[0] if c.startswith("error_")
+                   and any(r[c] and float(r[c]) > 0 for r in runs)]
         self.assertIn("error_probe_P", metrics)
         man = {s["id"]: s for s in self.manifest(self.out_two)["sections"]}
         p = self.tables(self.out_two)

@@ -1,0 +1,174 @@
+// Stress measures and the per-step stress peaks (solver/stress.hpp, internal_forces.hpp):
+// the three von Mises equivalents against closed forms, the upper bound that lets points skip,
+// the force pass's peaks against a separate stress pass, and von_mises_max on the oblique
+// plate independent of the history sampling interval.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "harness/case_setup.hpp"
+#include "harness/case_spec.hpp"
+#include "solver/internal_forces.hpp"
+#include "solver/run.hpp"
+#include "solver/stress.hpp"
+
+namespace ricochet {
+namespace {
+
+const std::string kCase = std::string(RICOCHET_SOURCE_DIR) + "/cases/oblique_plate.toml";
+
+// Uniaxial-strain stretch F = diag(a, 1) of St Venant-Kirchhoff in plane strain: E11 = (a^2 -
+// 1)/2, S11 = (lambda + 2 mu) E11, S22 = S33 = lambda E11, so S has the deviator of a uniaxial
+// state: vm(S) = |S11 - S22| = 2 mu E11. tau = F S F^T: tau11 = a^2 S11, tau22 = tau33 = S22,
+// sigma = tau / a.
+TEST(StressMeasures, UniaxialStrainClosedForms) {
+  const double young = 1e7, poisson = 0.25;
+  const StVenantKirchhoff mat = StVenantKirchhoff::make(young, poisson, 1000.0, PlaneMode::strain);
+  const double lambda = mat.lambda_3d, mu = mat.shear_modulus;
+  for (const double a : {0.8, 0.95, 1.0, 1.1, 1.3}) {
+    Mat2 F = Mat2::Identity();
+    F(0, 0) = a;
+    const Mat2 P = mat.first_piola(F);
+    const double e11 = 0.5 * (a * a - 1.0);
+    const double s11 = (lambda + 2.0 * mu) * e11, s22 = lambda * e11;
+    const double vm_pk2 = std::abs(s11 - s22);
+    const double vm_kirchhoff = std::abs(a * a * s11 - s22);
+    const double vm_cauchy = vm_kirchhoff / a;
+    const double scale = std::max(1.0, vm_pk2);
+    EXPECT_NEAR(std::sqrt(von_mises_ratio(mat, F, P, a, StressMeasure::pk2).value()), vm_pk2, 1e-9 * scale) << a;
+    EXPECT_NEAR(std::sqrt(von_mises_ratio(mat, F, P, a, StressMeasure::kirchhoff).value()), vm_kirchhoff, 1e-9 * scale)
+        << a;
+    EXPECT_NEAR(std::sqrt(von_mises_ratio(mat, F, P, a, StressMeasure::cauchy).value()), vm_cauchy, 1e-9 * scale) << a;
+    // The Cauchy value agrees with the material's own von_mises() (an independent formula).
+    EXPECT_NEAR(std::sqrt(von_mises_ratio(mat, F, P, a, StressMeasure::cauchy).value()), von_mises(Material{mat}, F),
+                1e-9 * scale);
+  }
+}
+
+// In plane stress and for every law, the Cauchy equivalent equals the material's von_mises(),
+// tau = J sigma, and the upper bound of von_mises_may_exceed never lets a point skip whose
+// value is above the threshold, on random deformation gradients.
+TEST(StressMeasures, CauchyKirchhoffAndTheBoundOnRandomStates) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> d(-0.25, 0.25);
+  std::vector<Material> materials;
+  for (const PlaneMode plane : {PlaneMode::stress, PlaneMode::strain}) {
+    materials.push_back(StVenantKirchhoff::make(1e7, 0.25, 1000.0, plane));
+    materials.push_back(NeoHookean::make(1e7, 0.3, 1000.0, plane));
+  }
+  int skipped = 0, checked = 0;
+  for (const Material& material : materials)
+    for (int k = 0; k < 200; ++k) {
+      Mat2 F;
+      F << 1.0 + d(rng), d(rng), d(rng), 1.0 + d(rng);
+      if (!(F.determinant() > 0.2)) continue;
+      std::visit(
+          [&](const auto& mat) {
+            const Mat2 P = mat.first_piola(F);
+            const double det = F.determinant();
+            const double cauchy = von_mises_ratio(mat, F, P, det, StressMeasure::cauchy).value();
+            const double kirchhoff = von_mises_ratio(mat, F, P, det, StressMeasure::kirchhoff).value();
+            const double j = det * mat.out_of_plane(F).stretch;
+            EXPECT_NEAR(std::sqrt(cauchy), von_mises(material, F), 1e-9 * std::sqrt(cauchy));
+            EXPECT_NEAR(kirchhoff, j * j * cauchy, 1e-9 * kirchhoff);
+            for (int m = 0; m < kStressMeasures; ++m) {
+              const auto measure = static_cast<StressMeasure>(m);
+              const double exact = von_mises_ratio(mat, F, P, det, measure).value();
+              // Just below the exact value: the bound must say "may exceed".
+              EXPECT_TRUE(von_mises_may_exceed(mat, F, P, det, measure, exact * (1.0 - 1e-9)));
+              // Far above it most points skip (the bound exceeds 10x the exact value only near
+              // hydrostatic states, whose von Mises equivalent is small against |A|).
+              const bool skip = !von_mises_may_exceed(mat, F, P, det, measure, 10.0 * exact);
+              skipped += skip;
+              ++checked;
+            }
+          },
+          material);
+    }
+  EXPECT_GT(checked, 1000);
+  // 82 % measured.
+  EXPECT_GT(skipped, 0.75 * checked) << "the bound is too loose to let points ten times below the threshold skip";
+}
+
+struct PlateRun {
+  PreparedCase prepared;
+  RunResult result;
+};
+
+PlateRun plate(const std::vector<std::string>& sets) {
+  std::vector<std::string> all = {"mesh=M1", "time.dt=2e-6", "time.end=1.2e-3", "output.fields=[]"};
+  all.insert(all.end(), sets.begin(), sets.end());
+  PlateRun run;
+  run.prepared = prepare_case(read_case(kCase, all));
+  run.result = run_explicit(run.prepared.model, run.prepared.settings);
+  return run;
+}
+
+// von_mises_max is the peak over every step: the same whatever the history interval. Sampled
+// (stress_every_step = false) with a coarse interval, it misses the peak, which is what the
+// every-step tracking is for.
+TEST(StressPeaks, VonMisesMaxIndependentOfOutputInterval) {
+  for (const char* measure : {"cauchy", "pk2", "kirchhoff"}) {
+    const std::string m = std::string("output.stress_measure=\"") + measure + "\"";
+    const PlateRun fine = plate({m, "output.interval=2e-6"});
+    const PlateRun coarse = plate({m, "output.interval=1e-3"});
+    const PlateRun sampled = plate({m, "output.interval=1e-3", "output.stress_every_step=false"});
+    const RunResult &a = fine.result, &b = coarse.result;
+    ASSERT_EQ(a.status, RunStatus::ok);
+    EXPECT_NEAR(b.von_mises_max, a.von_mises_max, 1e-3 * a.von_mises_max) << measure;
+    EXPECT_EQ(b.von_mises_max_time, a.von_mises_max_time) << measure;
+    EXPECT_NEAR(b.von_mises_interior_peak.value, a.von_mises_interior_peak.value, 1e-3 * a.von_mises_max) << measure;
+    // Every step was sampled in the fine run: its largest history value is the peak itself.
+    const History& h = a.history;
+    double hist_max = 0.0;
+    for (std::size_t r = 0; r < h.rows(); ++r) hist_max = std::max(hist_max, h.at(r, h.column("von_mises_max")));
+    EXPECT_NEAR(hist_max, a.von_mises_max, 1e-12 * a.von_mises_max) << measure;
+    // The sampled maximum of a 1 ms interval misses the peak by far more than 0.1 %.
+    EXPECT_LT(sampled.result.von_mises_max, 0.98 * a.von_mises_max) << measure;
+    // Where: a cell of the plate, inside its bounding box at that time, interior peak no larger.
+    EXPECT_EQ(a.von_mises_peak.body, 0);
+    EXPECT_GE(a.von_mises_peak.element, 0);
+    EXPECT_LT(a.von_mises_peak.element, fine.prepared.model.num_cells());
+    EXPECT_GT(a.von_mises_peak.y, -1e-3);
+    EXPECT_LT(a.von_mises_peak.y, 0.09);
+    EXPECT_LE(a.von_mises_interior_peak.value, a.von_mises_peak.value);
+    EXPECT_GT(a.von_mises_interior_peak.value, 0.0);
+  }
+}
+
+// The force pass's peaks equal those of a separate stress pass on the same displacement, cell
+// and value, with and without a threshold below the peak.
+TEST(StressPeaks, ForcePassMatchesStressPass) {
+  const PlateRun run = plate({"time.end=6e-4", "output.fields=[6e-4]"});
+  ASSERT_EQ(run.result.fields.size(), 1u);
+  const Model& model = run.prepared.model;
+  const Eigen::VectorXd& u = run.result.fields[0].u;
+  std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
+  for (int c = 0; c < model.num_cells(); c += 3) contact_cell[c] = 1;
+  Eigen::VectorXd f(model.num_dofs());
+  for (int m = 0; m < kStressMeasures; ++m) {
+    StressTracking tracking;
+    tracking.contact_cell = contact_cell.data();
+    tracking.measure = static_cast<StressMeasure>(m);
+    const StressPeaks ref = stress_peaks(model, u.data(), tracking);
+    ASSERT_GT(ref.all, 0.0);
+    for (const double threshold : {0.0, 0.5 * ref.interior}) {
+      tracking.threshold = threshold;
+      const StressPeaks got = internal_forces(model, u.data(), u.data(), f.data(), false, &tracking).stress;
+      EXPECT_EQ(got.all_cell, ref.all_cell);
+      EXPECT_EQ(got.interior_cell, ref.interior_cell);
+      EXPECT_NEAR(got.all, ref.all, 1e-12 * ref.all);
+      EXPECT_NEAR(got.interior, ref.interior, 1e-12 * ref.all);
+    }
+    // Above every point: nothing is ranked, though some points pass the bound.
+    tracking.threshold = 2.0 * ref.all;
+    EXPECT_EQ(internal_forces(model, u.data(), u.data(), f.data(), false, &tracking).stress.all_cell, -1);
+  }
+}
+
+}  // namespace
+}  // namespace ricochet
