@@ -27,7 +27,8 @@ HistoryTable read_history_csv(const std::filesystem::path& path);
 
 struct ReferenceErrors {
   std::optional<double> probe;   // max |u_P - u_P,ref| over the samples [m]
-  std::optional<double> energy;  // max |E_total - E_total,ref| / energy_scale [-]
+  std::optional<double> energy;  // max |E - E_ref| / energy_scale, E = total + contact energy [-]
+  std::optional<double> energy_bodies;  // the same with E = total_energy alone (springs not counted) [-]
   std::size_t samples = 0;       // run samples compared
 };
 
@@ -53,6 +54,7 @@ struct RunOutputs {
 struct ReferenceMetrics {
   std::optional<double> probe;                  // error_probe_<P> [m]: history, any finished run
   std::optional<double> energy;                 // error_energy [-]: history, any finished run
+  std::optional<double> energy_bodies;          // error_energy_bodies [-]: history, any finished run
   std::optional<double> penetration;            // error_penetration [m]: the run's own penetration_max; run ok
   std::optional<double> rebound_velocity;       // error_rebound_velocity [m/s]: both ok
   std::optional<double> angular_momentum;       // error_angular_momentum [kg m^2/s]: both ok
@@ -72,7 +74,7 @@ struct ReferenceMetrics {
 // tangential_force). Never throws on missing or mistyped keys: that metric is empty.
 ReferenceMetrics compare_with_reference(const RunOutputs& run, const RunOutputs& ref, const std::string& probe);
 
-// The metric names in column order, for `probe`: "probe_<probe>", "energy", "penetration",
+// The metric names in column order, for `probe`: "probe_<probe>", "energy", "energy_bodies", "penetration",
 // "rebound_velocity", "angular_momentum", "impulse_normal", "impulse_tangential",
 // "contact_duration", "von_mises_interior", "von_mises_interior_time". The columns are
 // "error_<name>" and "floor_<name>" (no floor for penetration: docs/sweeps.md).

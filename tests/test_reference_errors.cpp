@@ -201,7 +201,7 @@ TEST(CompareWithReference, NonFiniteDifferencesAreInfinite) {
 
 TEST(CompareWithReference, MetricNamesAndFloors) {
   EXPECT_EQ(metric_names("top"),
-            (std::vector<std::string>{"probe_top", "energy", "penetration", "rebound_velocity", "angular_momentum",
+            (std::vector<std::string>{"probe_top", "energy", "energy_bodies", "penetration", "rebound_velocity", "angular_momentum",
                                       "impulse_normal", "impulse_tangential", "contact_duration", "von_mises_interior",
                                       "von_mises_interior_time"}));
   EXPECT_FALSE(has_floor("penetration"));
@@ -210,7 +210,31 @@ TEST(CompareWithReference, MetricNamesAndFloors) {
   ReferenceMetrics m;
   m.contact_duration = 0.5;
   const auto v = metric_values(m, "P");
-  ASSERT_EQ(v.size(), 10u);
-  EXPECT_EQ(v[7].first, "contact_duration");
-  EXPECT_EQ(*v[7].second, 0.5);
+  ASSERT_EQ(v.size(), 11u);
+  EXPECT_EQ(v[8].first, "contact_duration");
+  EXPECT_EQ(*v[8].second, 0.5);
+}
+
+// A penalty run whose springs hold energy: its total_energy dips by the contact_energy, which
+// counts with it, so against a reference that keeps 10 J in the bodies the error is 0; without
+// the contact_energy column the dip itself is the error.
+TEST(CompareWithReference, EnergyCountsThePenaltySpringEnergy) {
+  const HistoryTable ref = reference_history();
+  HistoryTable run{{"time", "total_energy", "contact_energy", "P_ux", "P_uy"}, {}};
+  for (int i = 0; i <= 4; ++i) {
+    const double t = 0.5 * i, held = i == 2 ? 1.5 : 0.25 * i * (4 - i) * 0.5;
+    run.rows.push_back({t, 10.0 - held, held, t, 0.0});
+  }
+  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
+  ASSERT_TRUE(m.energy);
+  EXPECT_NEAR(*m.energy, 0.0, 1e-15);
+  HistoryTable bodies_only{{"time", "total_energy", "P_ux", "P_uy"}, {}};
+  for (const auto& r : run.rows) bodies_only.rows.push_back({r[0], r[1], r[3], r[4]});
+  const ReferenceMetrics without = compare_with_reference({&s, &bodies_only}, {&rs, &ref}, "P");
+  ASSERT_TRUE(without.energy);
+  EXPECT_DOUBLE_EQ(*without.energy, 0.15);  // the 1.5 J held at t = 1, over E0 = 10 J
+  // error_energy_bodies leaves the springs out (the paper's E_t = E_c + E_e): the dip counts.
+  ASSERT_TRUE(m.energy_bodies);
+  EXPECT_DOUBLE_EQ(*m.energy_bodies, 0.15);
 }
