@@ -587,6 +587,19 @@ def sec_work_precision(ctx):
     return out
 
 
+def sec_scheme_limits(ctx):
+    """The paper report's scheme-limits table of the accuracy sweep (its work-precision part):
+    nothing without an accuracy sweep (the work-precision section says it is missing)."""
+    acc = ctx.get("acc")
+    if acc is None:
+        return []
+    s = RG.scheme_limits_section(ctx, acc, Section, sid="scheme_limits",
+                                 title_of=" (accuracy sweep; beyond the paper)")
+    if not s.available:
+        s.missing += f" Run `{ACC_CMD}`."
+    return s
+
+
 def _hi_reason(d):
     hi = d.get("smallest_unstable_dt")
     if hi is None:
@@ -773,6 +786,15 @@ def sec_sweep_wp(ctx):
     return out
 
 
+def sec_sweep_scheme_limits(ctx):
+    """Any sweep's scheme-limits table, then that of an accuracy sweep given with --accuracy."""
+    out = [RG.scheme_limits_section(ctx, ctx["main"], Section, sid="scheme_limits")]
+    if ctx.get("acc") is not None and ctx["acc"].dir != ctx["main"].dir:
+        out.append(RG.scheme_limits_section(ctx, ctx["acc"], Section, sid="acc_scheme_limits",
+                                            title_of=f" (sweep {ctx['acc'].name})"))
+    return out
+
+
 # The paper's sweep: the paper's Table 1 and Figs. 1-7 first, then what goes beyond the paper.
 PAPER_SECTIONS = [
     ("table1", sec_table1),
@@ -784,6 +806,7 @@ PAPER_SECTIONS = [
     ("fig6", lambda c: sec_probe(c, "fig6", "friction", 0.1, "Fig. 6")),
     ("fig7", sec_fig7),
     ("work_precision", sec_work_precision),
+    ("scheme_limits", sec_scheme_limits),
     ("stability", sec_stability),
     ("penetration", sec_penetration),
     ("verification", lambda c: RV.sections(c, Section)),   # one section per verification case
@@ -798,6 +821,7 @@ SWEEP_SECTIONS = [
     ("runs", sec_runs),
     ("failed", sec_failed),
     ("work_precision", sec_sweep_wp),
+    ("scheme_limits", sec_sweep_scheme_limits),
     ("stability", sec_stability),
     ("verification", lambda c: RV.sections(c, Section) if c.get("ver") else []),
     ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")

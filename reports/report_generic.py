@@ -5,6 +5,11 @@ make_report.py builds them for every sweep, the paper's included.
     runs_section(ctx, sweep, Section)      the runs table (+ the gates table)
     wp_sections(ctx, sweep, Section)       one work-precision figure and table per error_* column
     histories_section(ctx, sweep, Section) one small-multiples figure per run (capped)
+    scheme_limits_section(ctx, sweep, Section)
+                                           per mesh, how far apart the schemes are at their
+                                           smallest Δt (P trajectory, energy loss, rebound
+                                           velocity, normal impulse), and the shared
+                                           reference against its check run
 """
 
 import math
@@ -71,6 +76,13 @@ def metric_label(col):
 
 def finite(x):
     return x is not None and math.isfinite(x)
+
+
+def floor_column(sweep, metric):
+    """The reference-uncertainty column of an error column: `floor_<X>` for `error_<X>` as the
+    sweep writes it (docs/sweeps.md), else `floor_<metric>`."""
+    name = "floor_" + metric[len("error_"):] if metric.startswith("error_") else None
+    return name if name and name in sweep.columns else "floor_" + metric
 
 
 def metric_columns(sweep):
@@ -321,12 +333,31 @@ def wp_sections(ctx, sweep, Section, prefix="wp", title_of=""):
     return out
 
 
+def _reference_text(runs):
+    """How the runs were compared (summary.csv `reference_kind`, docs/sweeps.md)."""
+    kinds = {r.get("reference_kind") for r in runs} - {""}
+    shared = ("Runs compared with the sweep's shared reference (`[reference]`, on its own "
+              "mesh, scheme and Δt) carry the mesh and time discretisation errors together, "
+              "and for another scheme also the difference between the schemes.")
+    group = ("Runs compared with their group's own reference runs are compared with the "
+             "reference run that shares their crossed values, so these are time "
+             "discretisation errors of the scheme against itself at a small Δt.")
+    if kinds == {"shared"}:
+        return shared
+    if kinds == {"group"}:
+        return group
+    if kinds >= {"shared", "group"}:
+        return shared + " " + group
+    return ("Each run is compared with the reference run that shares its crossed values "
+            "(docs/sweeps.md), so these are discretisation errors against that reference.")
+
+
 def wp_section(ctx, sweep, Section, metric, sid, stem, title_of=""):
     unit = metric_unit(metric)
     s = Section(sid, f"Work-precision: {metric} against time-loop wall time{title_of}",
                 "figure")
     runs = [r for r in sweep.runs if r.kind == "run"]
-    floor_col = "floor_" + metric
+    floor_col = floor_column(sweep, metric)
     has_floor = floor_col in sweep.columns
     drawn, skipped = [], []
     for r in runs:
@@ -445,10 +476,287 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of=""):
            if has_floor else "")
         + " Observed order of the error in Δt (least squares over the points above any floor): "
         + (", ".join(orders) if orders else "– (fewer than 3 Δt per series)") + ". "
-        "Each run is compared with the reference run that shares its crossed values "
-        "(docs/sweeps.md), so these are discretisation errors against that reference. "
-        "References: " + (", ".join(f"`{x}`" for x in refs) if refs else "–") + "."
+        + _reference_text(drawn) + " References: " + (", ".join(f"`{x}`" for x in refs) if refs else "–") + "."
         + (" Not drawn: " + ", ".join(f"`{r.id}` ({why})" for r, why in skipped) + "."
            if skipped else "")
         + " Runs: " + ", ".join(f"`{i}`" for i in s.runs) + ".")
     return s
+
+
+# ---------------------------------------------------------------------------------------------
+# Scheme limits: how far apart the schemes are at their smallest Δt, per mesh
+
+SCHEME_ORDER = ("semi_explicit", "implicit", "explicit_penalty")
+SHARED_REFERENCE_GROUP = "reference"   # the folder / group of the shared reference's runs
+
+
+def _scheme_rank(scheme):
+    return (SCHEME_ORDER.index(scheme), "") if scheme in SCHEME_ORDER else (len(SCHEME_ORDER),
+                                                                            scheme)
+
+
+def probe_difference(ra, rb, probe="P"):
+    """max over time of |u_P,a(t) − u_P,b(t)| (Euclidean, history columns <P>_ux, <P>_uy): at
+    the samples of the run with fewer samples (ra's on a tie), the other run interpolated
+    linearly in time; samples outside the other run's time span are skipped. None when a
+    history or the probe is missing or no sample is compared."""
+    ha, hb = ra.history(), rb.history()
+    cx, cy = f"{probe}_ux", f"{probe}_uy"
+    if ha is None or hb is None or any(c not in h for h in (ha, hb) for c in (cx, cy, "time")):
+        return None
+    if len(hb["time"]) < len(ha["time"]):
+        ha, hb = hb, ha
+    t, tb = ha["time"], hb["time"]
+    tol = 1e-9 * max(abs(tb[0]), abs(tb[-1]))
+    m = (t >= tb[0] - tol) & (t <= tb[-1] + tol)
+    if not m.any():
+        return None
+    dx = ha[cx][m] - np.interp(t[m], tb, hb[cx])
+    dy = ha[cy][m] - np.interp(t[m], tb, hb[cy])
+    d = np.hypot(dx, dy)
+    d = d[np.isfinite(d)]
+    return float(d.max()) if d.size else None
+
+
+def _summary_num(r, *keys):
+    """A number of the run's summary.json (nested keys), else None."""
+    v = r.summary()
+    for k in keys:
+        if not isinstance(v, dict) or k not in v:
+            return None
+        v = v[k]
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    return float(v) if math.isfinite(v) else None
+
+
+def energy_loss(r):
+    """1 − E_end/E_0: E_end = the last history row's total_energy + contact_energy (the energy
+    held in penalty springs counts), E_0 = summary.json initial_energy. None when missing."""
+    h = r.history()
+    e0 = _summary_num(r, "initial_energy")
+    if e0 is None:
+        e0 = r.num("initial_energy")
+    if h is None or "total_energy" not in h or not e0:
+        return None
+    e = float(h["total_energy"][-1])
+    if "contact_energy" in h and math.isfinite(h["contact_energy"][-1]):
+        e += float(h["contact_energy"][-1])
+    return 1.0 - e / e0 if math.isfinite(e) else None
+
+
+def rebound_velocity(r):
+    """(v_x, v_y): summary.json rebound_velocity_x/_y, else final.momentum_x/_y ÷ total_mass."""
+    vx, vy = _summary_num(r, "rebound_velocity_x"), _summary_num(r, "rebound_velocity_y")
+    if vx is not None and vy is not None:
+        return vx, vy
+    px, py = _summary_num(r, "final", "momentum_x"), _summary_num(r, "final", "momentum_y")
+    m = _summary_num(r, "total_mass")
+    if px is not None and py is not None and m:
+        return px / m, py / m
+    return None
+
+
+def normal_impulse(r):
+    v = _summary_num(r, "contact_impulse_normal")
+    return v if v is not None else r.num("contact_impulse_normal")
+
+
+def compare_runs(ra, rb, probe="P"):
+    """The scheme-limits measures of run rb against the base run ra (None where missing)."""
+    la, lb = energy_loss(ra), energy_loss(rb)
+    va, vb = rebound_velocity(ra), rebound_velocity(rb)
+    ia, ib = normal_impulse(ra), normal_impulse(rb)
+    return {
+        "probe": probe_difference(ra, rb, probe),
+        "loss_a": la, "loss_b": lb,
+        "loss_diff": lb - la if la is not None and lb is not None else None,
+        "velocity": (math.hypot(vb[0] - va[0], vb[1] - va[1])
+                     if va is not None and vb is not None else None),
+        "impulse": ib - ia if ia is not None and ib is not None else None,
+    }
+
+
+def _pct(x):
+    return "–" if x is None else f"{fmt_g(100 * x)} %"
+
+
+def _pp(x):
+    return "–" if x is None else ("+" if x > 0 else "") + fmt_g(100 * x)
+
+
+def _run_cell(r):
+    auto = ", automatic" if r.get("dt_mode") == "auto" else ""
+    fsi = r.num("penalty_scale_factor")
+    return (f"`{r.id}` ({scheme_name(r.scheme)}"
+            + (f", f_si = {fmt_g(fsi)}" if fsi is not None else "")
+            + f", Δt = {fmt_dt(r.dt)} s{auto})")
+
+
+def scheme_limit_pairs(sweep):
+    """[(mesh label, elements, base run, compared run)], meshes by elements: per (case, mesh),
+    each scheme's ok run with the smallest Δt (the groups' own reference runs included, the
+    shared reference's runs not), every other scheme against the base scheme (semi-explicit
+    where it ran)."""
+    cands = [r for r in sweep.runs if r.ok and r.group != SHARED_REFERENCE_GROUP
+             and r.dt is not None and r.scheme and r.mesh]
+    cases = {r.get("case") for r in cands}
+    by_mesh = {}
+    for r in cands:
+        by_mesh.setdefault((r.get("case"), r.mesh), []).append(r)
+    out = []
+    for (case, mesh), rs in by_mesh.items():
+        finest_of = {}
+        for r in rs:   # smallest Δt per scheme; the first in the sweep's order on a tie
+            if r.scheme not in finest_of or r.dt < finest_of[r.scheme].dt * (1 - 1e-9):
+                finest_of[r.scheme] = r
+        if len(finest_of) < 2:
+            continue
+        schemes = sorted(finest_of, key=_scheme_rank)
+        base = finest_of[schemes[0]]
+        els = [r.num("elements") for r in rs if r.num("elements") is not None]
+        label = mesh + (f" ({case})" if len(cases) > 1 and case else "")
+        for sc in schemes[1:]:
+            out.append((label, els[0] if els else None, base, finest_of[sc]))
+    out.sort(key=lambda p: (p[1] if p[1] is not None else math.inf, p[0],
+                            _scheme_rank(p[3].scheme)))
+    return out
+
+
+def shared_reference_pair(sweep):
+    """(reference run, check run) of the sweep's [reference], or None."""
+    refs = [r for r in sweep.runs if r.group == SHARED_REFERENCE_GROUP]
+    for ref in refs:
+        if ref.id.endswith("-check"):
+            continue
+        chk = next((r for r in refs if r.id == ref.id + "-check"), None)
+        if chk is not None:
+            return ref, chk
+    return None
+
+
+def _trend(values, unit):
+    """'a u (M1) → b u (M2), shrinking with every refinement (×r overall)' over the meshes in
+    order; '–' without values."""
+    vals = [(m, v) for m, v in values if v is not None]
+    if not vals:
+        return "–"
+    text = " → ".join(f"{fmt_g(v)} {unit} ({m})" for m, v in vals)
+    vs = [v for _, v in vals]
+    if len(vs) >= 2:
+        if all(b < a for a, b in zip(vs, vs[1:])):
+            text += (", shrinking with every refinement" if len(vs) > 2 else
+                     ", shrinking with refinement") + (
+                f" (×{vs[-1] / vs[0]:.2g} from {vals[0][0]} to {vals[-1][0]})" if vs[0] else "")
+        elif all(b > a for a, b in zip(vs, vs[1:])):
+            text += ", growing with refinement"
+        else:
+            text += ", not monotonic in the mesh"
+    return text
+
+
+def scheme_limits_section(ctx, sweep, Section, sid="scheme_limits", title_of=""):
+    s = Section(sid, f"Scheme limits: how far apart the schemes are at their smallest Δt, per "
+                f"mesh{title_of}", "table")
+    probe = ((sweep.meta.get("reference") or {}).get("error_probe")
+             if isinstance(sweep.meta.get("reference"), dict) else None) or "P"
+    pairs = scheme_limit_pairs(sweep)
+    refpair = shared_reference_pair(sweep)
+    if not pairs:
+        s.available = False
+        s.missing = (f"no mesh of {sweep.dir} has ok runs of two schemes.")
+        return s
+    s.header = ["mesh: compared vs base scheme", "elements", "base run", "compared run",
+                f"{probe} trajectory difference, max over time (m)",
+                "energy loss 1 − E_end/E₀, base (%)", "energy loss, compared (%)",
+                "energy loss, compared − base (% points)",
+                "rebound velocity difference |v_compared − v_base| (m/s)",
+                "normal contact impulse, compared − base (N·s)"]
+    results = []
+    for label, els, a, b in pairs:
+        c = compare_runs(a, b, probe)
+        results.append((label, a, b, c))
+        s.rows.append([f"{label}: {scheme_name(b.scheme)} vs {scheme_name(a.scheme)}",
+                       fmt_g(els) if els is not None else "–", _run_cell(a), _run_cell(b),
+                       fmt_g(c["probe"]), _pct(c["loss_a"]), _pct(c["loss_b"]),
+                       _pp(c["loss_diff"]), fmt_g(c["velocity"]), fmt_g(c["impulse"])])
+        s.runs += [x for x in (a.id, b.id) if x not in s.runs]
+    refc = None
+    if refpair:
+        ref, chk = refpair
+        meshes = " / ".join(dict.fromkeys(m for m in (ref.mesh, chk.mesh) if m)) or "–"
+        if ref.ok and chk.ok:
+            refc = compare_runs(ref, chk, probe)
+        else:
+            refc = dict.fromkeys(("probe", "loss_a", "loss_b", "loss_diff", "velocity",
+                                  "impulse"))
+        els = ref.num("elements")
+        s.rows.append([f"reference uncertainty (check − reference, {meshes})",
+                       fmt_g(els) if els is not None else "–", _run_cell(ref), _run_cell(chk),
+                       fmt_g(refc["probe"]), _pct(refc["loss_a"]), _pct(refc["loss_b"]),
+                       _pp(refc["loss_diff"]), fmt_g(refc["velocity"]),
+                       fmt_g(refc["impulse"])])
+        s.runs += [ref.id, chk.id]
+    s.sources = [sweep.dir]
+    # the trend, per compared scheme pair, over the meshes in order of elements
+    kinds = list(dict.fromkeys((b.scheme, a.scheme) for _, a, b, _ in results))
+    trends = []
+    for sb, sa in kinds:
+        rows = [(lab, c) for lab, a, b, c in results if (b.scheme, a.scheme) == (sb, sa)]
+        trends.append(
+            f"{scheme_name(sb)} vs {scheme_name(sa)}: {probe} difference "
+            + _trend([(lab, c["probe"]) for lab, c in rows], "m") + "; rebound velocity "
+            "difference " + _trend([(lab, c["velocity"]) for lab, c in rows], "m/s") + "; "
+            "energy loss difference "
+            + (", ".join(f"{_pp(c['loss_diff'])} ({lab})" for lab, c in rows
+                         if c["loss_diff"] is not None) or "–") + " % points")
+    unequal = [f"{lab} ({scheme_name(b.scheme)} at {fmt_dt(b.dt)} s, {scheme_name(a.scheme)} at "
+               f"{fmt_dt(a.dt)} s)" for lab, a, b, _ in results if not _same_dt(a.dt, b.dt)]
+    pens = [r for r in (x for _, a, b, _ in results for x in (a, b))
+            if r.num("penalty_scale_factor") is not None]
+    if refpair:
+        pens += [r for r in refpair if r.num("penalty_scale_factor") is not None]
+    pens = list({r.id: r for r in pens}.values())
+    pen_text = (" Penalty runs (f_si = `penalty_scale_factor`): their difference to a "
+                "bi-potential run includes the penetration that the springs allow, "
+                "`penetration_max` " + ", ".join(
+                    f"{fmt_g(r.num('penetration_max'))} m ({r.mesh}, f_si = "
+                    f"{fmt_g(r.num('penalty_scale_factor'))})" for r in pens) + "."
+                if pens else "")
+    ref_text = ""
+    if refpair:
+        ref, chk = refpair
+        ref_text = (f" Last row: the sweep's shared reference `{ref.id}` against its check run "
+                    f"`{chk.id}`, measured the same way (check − reference): the reference's own "
+                    "uncertainty (the `floor_*` columns measure the same pair)"
+                    + (f", {probe} difference {fmt_g(refc['probe'])} m and rebound velocity "
+                       f"difference {fmt_g(refc['velocity'])} m/s"
+                       if refc and refc["probe"] is not None
+                       else " (not measured: a run missing or not ok)")
+                    + (f"; as the check run is {scheme_name(chk.scheme)} and the reference "
+                       f"{scheme_name(ref.scheme)}, it is also that pair's difference on "
+                       f"{ref.mesh} ({fmt_g(ref.num('elements'))} elements)"
+                       if chk.scheme != ref.scheme else "") + ".")
+    s.caption = (
+        "Per mesh (ordered by elements; `elements` of summary.csv), each scheme's ok run with "
+        "the smallest Δt on that mesh (the groups' own reference runs included, the shared "
+        "reference's runs not), compared with the base scheme's (semi-explicit where it ran). "
+        f"**{probe} trajectory difference**: max over time of the Euclidean distance between "
+        f"the two runs' probe {probe} (history.csv `{probe}_ux`, `{probe}_uy`), at the samples of "
+        "the run with fewer samples, the other run interpolated linearly in time, samples "
+        "outside its time span skipped. **Energy loss**: 1 − E_end/E₀, E_end = the last history "
+        "row's `total_energy` + `contact_energy` (the energy held in penalty springs counts), "
+        "E₀ = summary.json `initial_energy`. **Rebound velocity difference**: |v_compared − "
+        "v_base| of summary.json `rebound_velocity_x`, `rebound_velocity_y` (else "
+        "`final.momentum_x`, `_y` ÷ `total_mass`). **Normal contact impulse**: the difference "
+        "of summary.json `contact_impulse_normal`. – : a value missing (no history, no probe, "
+        "no summary key). Trend over the meshes: " + "; ".join(trends) + "."
+        + (" The two runs' Δt differ on " + "; ".join(unequal) + ": there the difference also "
+           "holds the time-discretisation error of the larger Δt, not only the schemes' limits."
+           if unequal else "")
+        + ref_text + pen_text + " Runs: " + ", ".join(f"`{i}`" for i in s.runs) + ".")
+    return s
+
+
+def _same_dt(a, b):
+    return a is not None and b is not None and abs(a - b) <= 1e-9 * max(abs(a), abs(b))

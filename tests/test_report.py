@@ -27,7 +27,8 @@ The report of any sweep (class SweepReport) is run on
       run fails one gate, and a copy of it with a `floor_` column;
 and, like the paper reports, each must give an index.html whose every <img> exists and loads
 as a non-empty PNG; the paper's sections must be absent, the runs table, the gate mapping, the
-work-precision points and the run histories present. reports/plot_run.py must draw one run and
+work-precision points, the scheme-limits table (one row per mesh × scheme pair, its P difference
+recomputed here from the two history.csv files) and the run histories present. reports/plot_run.py must draw one run and
 fail with one line (exit 2) on a folder without history.csv.
 
     /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
@@ -264,6 +265,59 @@ def section_html(text, sid):
     return text[start:text.index("</section>", start)]
 
 
+def history_columns(path, cols):
+    """Columns of a history.csv as lists of floats (read here, not with the report's reader)."""
+    rows = read_csv(path)
+    return {c: [float(r[c]) for r in rows] for c in cols}
+
+
+def p_difference(dir_a, dir_b):
+    """The scheme-limits P trajectory difference recomputed from two history.csv files: max
+    over the samples of the run with fewer samples (a's on a tie) of |u_P − u_P,other|, the
+    other run interpolated linearly in time, samples outside its time span skipped."""
+    import numpy as np
+    cols = ("time", "P_ux", "P_uy")
+    a = history_columns(os.path.join(dir_a, "history.csv"), cols)
+    b = history_columns(os.path.join(dir_b, "history.csv"), cols)
+    if len(b["time"]) < len(a["time"]):
+        a, b = b, a
+    tb = np.array(b["time"])
+    tol = 1e-9 * max(abs(tb[0]), abs(tb[-1]))
+    best = None
+    for t, ux, uy in zip(a["time"], a["P_ux"], a["P_uy"]):
+        if t < tb[0] - tol or t > tb[-1] + tol:
+            continue
+        d = float(np.hypot(ux - np.interp(t, tb, b["P_ux"]), uy - np.interp(t, tb, b["P_uy"])))
+        best = d if best is None else max(best, d)
+    return best
+
+
+def check_scheme_limits(tc, rows, folder, expected_labels):
+    """The scheme-limits table of the sweep in FOLDER: one row per mesh × compared scheme
+    (labels as expected), built from each scheme's ok run with the smallest Δt on the mesh,
+    whose P difference is the one recomputed from the two history.csv files."""
+    import math
+    runs = [r for r in read_csv(os.path.join(folder, "summary.csv"))
+            if r["status"] == "ok" and r["group"] != "reference"]
+    tc.assertEqual([r[0] for r in rows], expected_labels)
+    for row in rows:
+        mesh = row[0].split(":")[0]
+        picked = []
+        for cell in row[2:4]:
+            rid = re.match(r"(\S+) \(", cell).group(1)
+            r = next(x for x in runs if x["run_id"] == rid)
+            tc.assertEqual(r["summary.mesh"], mesh, row)
+            same = [x for x in runs if x["summary.mesh"] == mesh
+                    and x["summary.scheme"] == r["summary.scheme"]]
+            tc.assertEqual(float(r["dt"]), min(float(x["dt"]) for x in same), row)
+            picked.append(os.path.join(folder, "runs", rid))
+        want = p_difference(*picked)
+        tc.assertIsNotNone(want)
+        got = float(row[4])
+        unit = 10 ** math.floor(math.log10(want))   # the cell has 3 significant digits
+        tc.assertLessEqual(abs(got - want), 0.0051 * unit, (row, want))
+
+
 BG = {}   # the verification sweep of SweepReport, started first so that it runs beside the others
 
 
@@ -329,7 +383,7 @@ class ReportSmoke(unittest.TestCase):
         cls.out_bare = os.path.join(cls.paper, "report")
         # 2: every source (the Kim–Kwak-type sweep discovered next to DIR)
         cls.out_full = os.path.join(t, "full_report")
-        run([PY, SCRIPT, cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
+        run([BINARY, "report", cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
              "--verification", cls.ver, "--kim-kwak-fields", cls.kk_fields,
              "--out", cls.out_full])
 
@@ -410,7 +464,8 @@ class ReportSmoke(unittest.TestCase):
         self.assertIn("error_probe_P", metrics)
         wp_ids = {"wp_" + m for m in metrics}
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
-                    "stability", "penetration", "failed", "runs", "histories"} | wp_ids \
+                    "stability", "penetration", "failed", "runs", "histories",
+                    "scheme_limits"} | wp_ids \
             | ver_ids | set(KK_IDS)
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
@@ -495,6 +550,9 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(sorted(r[0] for r in wp), sorted(r["run_id"] for r in acc_runs))
         self.assertEqual({r[0] for r in wp if "not drawn" not in r[6]}, drawn)
         self.assertTrue(drawn and len(drawn) < len(acc_runs))  # the diverged run is not drawn
+        # scheme limits of the accuracy sweep: one mesh (M1), implicit against semi-explicit
+        check_scheme_limits(self, tables["tab-scheme_limits"], self.acc,
+                            ["M1: implicit vs semi-explicit"])
         self.assertEqual(len(tables["tab-stability_table"]), 2)
         self.assertEqual(first("tab-penetration_table"),
                          [r["run_id"] for r in main if r["status"] == "ok"])
@@ -641,7 +699,8 @@ class SweepReport(unittest.TestCase):
                 w.writerow(dict(r, floor_error_probe_P=repr(cls.floor_value)
                                 if r["kind"] == "run" else ""))
         cls.out_two = os.path.join(t, "report_two")
-        run([PY, SCRIPT, cls.two, "--out", cls.out_two])
+        # (a), (b) and the full paper report go through `ricochet report`, as a user runs it
+        run([BINARY, "report", cls.two, "--out", cls.out_two])
         cls.out_two1 = os.path.join(t, "report_two_capped")
         run([PY, SCRIPT, cls.two, "--out", cls.out_two1, "--max-run-plots", "1"])
         cls.out_floor = os.path.join(cls.floor, "report")   # the default output folder
@@ -653,7 +712,7 @@ class SweepReport(unittest.TestCase):
                                  f"{BG['ver_proc'].returncode}\n{out}\n{err}")
         cls.ver = BG["ver"]
         cls.out_ver = os.path.join(t, "report_ver")
-        run([PY, SCRIPT, cls.ver, "--out", cls.out_ver])
+        run([BINARY, "report", cls.ver, "--out", cls.out_ver])
 
     def manifest(self, out):
         with open(os.path.join(out, "manifest.json")) as f:
@@ -752,6 +811,18 @@ class SweepReport(unittest.TestCase):
             self.assertIn("Pareto front", text)
             for r in runs:  # every point's Δt is labelled (no collisions in two points)
                 self.assertIn(r["time.dt"].replace("e-0", "e-"), text)
+
+    def test_scheme_limits(self):
+        """The two-run sweep has two schemes on M1: one row, explicit penalty against
+        semi-explicit, at each scheme's smallest Δt (its reference run), with the P difference
+        of the two history.csv files."""
+        p = self.tables(self.out_two)
+        check_scheme_limits(self, p.tables["tab-scheme_limits"], self.two,
+                            ["M1: explicit penalty vs semi-explicit"])
+        self.assertEqual(len(p.headers["tab-scheme_limits"]), 10)
+        man = {s["id"]: s for s in self.manifest(self.out_two)["sections"]}
+        self.assertEqual(man["scheme_limits"]["tables"][0]["rows"],
+                         ["M1: explicit penalty vs semi-explicit"])
 
     def test_floor(self):
         """Points under the reference's uncertainty are flagged, the others are not."""
