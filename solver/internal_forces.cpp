@@ -177,15 +177,20 @@ namespace {
 // Calls fn(global cell, the cell's squared von Mises equivalents: max over its integration points).
 template <class Fn>
 void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
-  for (const auto& b : model.q4_hourglass)
-    std::visit(
-        [&](const auto& mat) {
-          for (std::size_t e = 0; e < b.conn.size(); ++e) {
-            const Mat2 F = deformation_gradient<4>(gather<4>(u, b.conn[e]), b.geom[e].dndx);
-            fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
-          }
-        },
-        b.material);
+  // One-point cells (Q4 with hourglass control, T3): F at the centroid.
+  auto one_point = [&]<int N>(const auto& blocks) {
+    for (const auto& b : blocks)
+      std::visit(
+          [&](const auto& mat) {
+            for (std::size_t e = 0; e < b.conn.size(); ++e) {
+              const Mat2 F = deformation_gradient<N>(gather<N>(u, b.conn[e]), b.geom[e].dndx);
+              fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+            }
+          },
+          b.material);
+  };
+  one_point.template operator()<4>(model.q4_hourglass);
+  one_point.template operator()<3>(model.t3);
   for (const auto& b : model.q4_full)
     std::visit(
         [&](const auto& mat) {
@@ -197,15 +202,6 @@ void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
               max_into(vm2, von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
             }
             fn(b.first_cell + static_cast<int>(e), vm2);
-          }
-        },
-        b.material);
-  for (const auto& b : model.t3)
-    std::visit(
-        [&](const auto& mat) {
-          for (std::size_t e = 0; e < b.conn.size(); ++e) {
-            const Mat2 F = deformation_gradient<3>(gather<3>(u, b.conn[e]), b.geom[e].dndx);
-            fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
           }
         },
         b.material);

@@ -44,26 +44,6 @@ inline double von_mises_squared(double a11, double a22, double a33, double a12) 
   return 0.5 * (d1 * d1 + d2 * d2 + d3 * d3) + 3.0 * a12 * a12;
 }
 
-// The three squared equivalents at one integration point; `det_f` is det F of the in-plane
-// block (the kernels have it already). Shear parts are symmetrised (exact for tau and S up to
-// round-off).
-template <class Mat>
-inline VonMises2 von_mises_squared(const Mat& mat, const Mat2& F, const Mat2& P, double det_f) {
-  const auto o = mat.out_of_plane(F);
-  const Mat2 tau = P * F.transpose();
-  const double tau33 = o.stretch * o.stretch * o.pk2;
-  const double k2 = von_mises_squared(tau(0, 0), tau(1, 1), tau33, 0.5 * (tau(0, 1) + tau(1, 0)));
-  const double j = det_f * o.stretch;
-  // S = F^-1 P with F^-1 = adj(F) / det F.
-  const double inv = 1.0 / det_f;
-  const double s11 = inv * (F(1, 1) * P(0, 0) - F(0, 1) * P(1, 0));
-  const double s12 = inv * (F(1, 1) * P(0, 1) - F(0, 1) * P(1, 1));
-  const double s21 = inv * (F(0, 0) * P(1, 0) - F(1, 0) * P(0, 0));
-  const double s22 = inv * (F(0, 0) * P(1, 1) - F(1, 0) * P(0, 1));
-  const double p2 = von_mises_squared(s11, s22, o.pk2, 0.5 * (s12 + s21));
-  return {k2 / (j * j), p2, k2};
-}
-
 inline void max_into(VonMises2& acc, const VonMises2& x) {
   for (int m = 0; m < kStressMeasures; ++m) acc[m] = std::max(acc[m], x[m]);
 }
@@ -111,6 +91,16 @@ inline VonMisesRatio von_mises_ratio(const Mat& mat, const Mat2& F, const Mat2& 
   const double k2 = von_mises_squared(t11, t22, f33_2 * o.pk2, t12);
   if (measure == StressMeasure::kirchhoff) return {k2, 1.0};
   return {k2, det_f * det_f * f33_2};  // J^2 = (det F F33)^2
+}
+
+// The three squared equivalents at one integration point, indexed by StressMeasure [Pa^2]
+// (for the history samples and the fields, not the per-step pass).
+template <class Mat>
+inline VonMises2 von_mises_squared(const Mat& mat, const Mat2& F, const Mat2& P, double det_f) {
+  VonMises2 out;
+  for (int m = 0; m < kStressMeasures; ++m)
+    out[m] = von_mises_ratio(mat, F, P, det_f, static_cast<StressMeasure>(m)).value();
+  return out;
 }
 
 // Whether the squared equivalent at a point can exceed `threshold` [Pa^2], from a cheap upper
