@@ -23,11 +23,21 @@
 
 namespace {
 
+constexpr const char* kRunUsage =
+    "usage: ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet]\n"
+    "  run a case (docs/case-format.md); writes DIR/summary.json, DIR/history.csv, DIR/fields/*.vtu\n"
+    "  --set KEY=VALUE  override a case key, e.g. --set time.dt=1e-6 --set mesh=M2 (repeatable)\n"
+    "  --out DIR        output folder (default: results/<case name>)\n"
+    "  --quiet, -q      no progress and no summary line\n"
+    "  --help, -h       this text\n"
+    "  exit status: 0 ok, 3 diverged (outputs written), 2 bad input (nothing written), 1 other error\n";
+
 constexpr const char* kUsage =
     "usage: ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet]\n"
-    "       ricochet sweep SWEEP.toml --out DIR [--jobs N] [--repeat K] [--check GATES.toml] [--force]\n"
+    "       ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]\n"
     "       ricochet check SUMMARY.csv GATES.toml [--junit FILE]\n"
-    "       ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR]\n"
+    "       ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR] [--tolerance REL] [--max-runs N]\n"
+    "                          [--end TIME] [--energy-bound E] [--quiet]\n"
     "       ricochet report DIR [--out OUT] [options of reports/make_report.py]\n"
     "       ricochet plot RUN_DIR [--out PNG]\n"
     "       ricochet --version | --help\n"
@@ -39,7 +49,8 @@ constexpr const char* kUsage =
     "  check     evaluate gate files on a sweep's summary.csv (docs/gates.md); exit 4 if a gate fails\n"
     "  stability the largest stable time step by bisection (docs/stability.md)\n"
     "  report    the HTML report of any sweep folder (docs/report.md): DIR/report/index.html\n"
-    "  plot      one PNG of a run's history (docs/report.md): RUN_DIR/history.png\n";
+    "  plot      one PNG of a run's history (docs/report.md): RUN_DIR/history.png\n"
+    "  ricochet COMMAND --help gives each command's options.\n";
 
 // `ricochet report` and `ricochet plot`: the report scripts, run by Debian's Python with the
 // arguments as given (RICOCHET_PYTHON and RICOCHET_REPORTS override the interpreter and the
@@ -105,7 +116,11 @@ int run_command(const std::vector<std::string>& args) {
     else if (a == "--out") out_dir = value("--out");
     else if (a.rfind("--out=", 0) == 0) out_dir = a.substr(6);
     else if (a == "--quiet" || a == "-q") quiet = true;
-    else if (!a.empty() && a[0] == '-') throw ricochet::InputError("ricochet run: unknown option '" + a + "'; allowed: --set, --out, --quiet");
+    else if (a == "--help" || a == "-h") {
+      std::fputs(kRunUsage, stdout);
+      return 0;
+    }
+    else if (!a.empty() && a[0] == '-') throw ricochet::InputError("ricochet run: unknown option '" + a + "'; allowed: --set, --out, --quiet, --help");
     else if (case_file.empty()) case_file = a;
     else throw ricochet::InputError("ricochet run: more than one case file ('" + case_file + "', '" + a + "')");
   }

@@ -52,7 +52,9 @@ constexpr const char* kUsage =
     "  --repeat  run each case K times; summary.csv gets the median and the spread of the timings\n"
     "  --check   then check the gates of GATES.toml on DIR/summary.csv (docs/gates.md); exit 4 if one fails\n"
     "  --force   rerun the runs that an earlier sweep finished\n"
-    "  --quiet   no progress lines\n";
+    "  --quiet   no progress lines\n"
+    "  --help    this text\n"
+    "  exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 2 bad input, 1 other error\n";
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -957,8 +959,12 @@ int sweep_command(const std::vector<std::string>& args) {
       else if (is("--check")) gates_file = value("--check");
       else if (a == "--force") opt.force = true;
       else if (a == "--quiet" || a == "-q") opt.quiet = true;
+      else if (a == "--help" || a == "-h") {
+        std::fputs(kUsage, stdout);
+        return 0;
+      }
       else if (!a.empty() && a[0] == '-')
-        throw InputError("ricochet sweep: unknown option '" + a + "'; allowed: --out, --jobs, --repeat, --check, --force, --quiet");
+        throw InputError("ricochet sweep: unknown option '" + a + "'; allowed: --out, --jobs, --repeat, --check, --force, --quiet, --help");
       else if (file.empty()) file = a;
       else throw InputError("ricochet sweep: more than one sweep file ('" + file + "', '" + a + "')");
     }

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -211,4 +213,32 @@ TEST_F(CliTest, DivergedRunIsAResult) {
   std::stringstream summary;
   summary << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
   EXPECT_NE(summary.str().find("\"status\": \"diverged\""), std::string::npos) << summary.str();
+}
+
+// Every command answers --help (and -h) on stdout with exit 0 and names each of its options;
+// the top-level usage names every command. The option lists are what each command accepts
+// (an option missing from its help would be a documentation defect).
+TEST_F(CliTest, EveryCommandAnswersHelp) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> commands = {
+      {"run", {"--set", "--out", "--quiet"}},
+      {"sweep", {"--out", "--jobs", "--repeat", "--check", "--force", "--quiet"}},
+      {"check", {"--junit"}},
+      {"stability", {"--set", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
+      {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},
+      {"plot", {"--out"}},
+  };
+  const Outcome top = run("--help");
+  EXPECT_EQ(top.status, 0) << top.output;
+  for (const auto& [command, options] : commands) {
+    EXPECT_NE(top.output.find("ricochet " + command + " "), std::string::npos) << command << " in: " << top.output;
+    for (const char* flag : {"--help", "-h"}) {
+      const Outcome o = run(command + " " + flag);
+      EXPECT_EQ(o.status, 0) << command << " " << flag << ": " << o.output;
+      EXPECT_NE(o.output.find("usage"), std::string::npos) << command << ": " << o.output;
+      for (const auto& option : options)
+        EXPECT_NE(o.output.find(option), std::string::npos) << command << " --help lacks " << option << ": " << o.output;
+    }
+  }
+  // Top-level usage without a command goes to stderr with exit 2 (no command is bad input).
+  EXPECT_EQ(run("").status, 2);
 }
