@@ -1,7 +1,7 @@
 // The stability search (`ricochet stability`): the largest stable time step of a case's scheme
-// on its mesh, found by bracketing and bisection over whole runs, next to the theoretical
-// estimate of literature 3.2 (model.critical_dt, min L_e / c_p; for the explicit penalty scheme
-// the combined element and spring limit). Criterion, algorithm and output keys:
+// on its mesh, found by bracketing and bisection over whole runs, next to the theoretical estimate
+// of docs/background.md, Critical time step (model.critical_dt, min L_e / c_p; for the explicit
+// penalty scheme the combined element and spring limit). Criterion, algorithm and output keys:
 // docs/stability.md.
 #pragma once
 

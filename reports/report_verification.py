@@ -293,7 +293,8 @@ def fig_head_on(outdir, stem, runs, table, labels):
 
 CASES = [
     CaseSpec(
-        case="bar_wall", title="Bar on a rigid wall (literature §4 B1, B1a)", ref="bar_wall",
+        case="bar_wall", title="Bar on a rigid wall (benchmarks B1, B1a of docs/background.md)",
+        ref="bar_wall",
         quantities=[
             Quantity("plateau contact force: mean of `normal_force` over 2.5–97.5 % of 2L/c",
                      "N", "contact_force", plateau_mean()),
@@ -351,7 +352,8 @@ CASES = [
                  "added; its reference keys are read as `impulse_ratio` (else `mu`) and "
                  "`angular_momentum_gain` (else `final_angular_momentum`)")),
     CaseSpec(
-        case="head_on", title="Two bars, head-on impact (literature §4 B2)", ref="head_on",
+        case="head_on", title="Two bars, head-on impact (benchmark B2 of docs/background.md)",
+        ref="head_on",
         aliases=("two_bars", "bar_bar"),
         quantities=[
             Quantity("interface force: mean of `normal_force` over 2.5–97.5 % of 2L/c", "N",

@@ -1,4 +1,5 @@
-// Central-difference explicit integration with a lumped mass (literature 2.5, steps 1, 2, 5):
+// Central-difference explicit integration with a lumped mass (docs/background.md, Central
+// differences with a lumped mass, steps 1, 2, 5):
 //   a_n = M^-1 (f_ext - f_int(u_n)),  v_{n+1/2} = v_{n-1/2} + dt a_n,  u_{n+1} = u_n + dt v_{n+1/2}.
 // The step is split into phases so a scheme can act between them (contact, from the next
 // schemes on) and observers can read the state at t_n: evaluate() then update().
@@ -60,7 +61,8 @@ inline double velocity_at_step(const State& s, int dof) {
   return s.v_half[dof] + 0.5 * s.dt * s.a[dof];
 }
 
-// Fixed-step estimate: safety * min over cells of L_e / c_p (literature 3.2). [s]
+// Fixed-step estimate: safety * min over cells of L_e / c_p (docs/background.md, Critical time
+// step). [s]
 inline double stable_time_step(const Model& model, double safety) {
   return safety * model.critical_dt;
 }

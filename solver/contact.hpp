@@ -14,7 +14,7 @@
 
 namespace ricochet {
 
-// A rigid obstacle (literature: rigid foundation). One geometric query, closest(), serves
+// A rigid obstacle (a rigid foundation). One geometric query, closest(), serves
 // every scheme: the signed gap g of a point x (g >= 0 on the allowed side, g < 0 inside the
 // obstacle) and the unit outward normal n at the closest point of the obstacle's boundary,
 // pointing to the allowed side; the tangent is t = (n_y, -n_x) (n rotated by -90 degrees).
@@ -110,7 +110,8 @@ inline ObstacleContact step_frame(const Obstacle& ob, const Vec2& x_start, const
   return {m.gap + m.normal.dot(x_pred - x_mid), m.normal};
 }
 
-// Which quantity x the local problem is written on (literature 2.5 and open question 6.1).
+// Which quantity x the local problem is written on (docs/background.md, Rigid obstacle: the
+// closed-form fixed point; an open question of Cros et al. 2010, Eq. (5)).
 enum class ContactLevel {
   position,  // x = (gap at t+dt, slip increment over the step), w = dt^2/m: no penetration at t+dt
   velocity,  // x = relative velocity v_{n+1/2}, w = dt/m, active when the predicted gap <= 0

@@ -1,8 +1,9 @@
 // The local frictional contact problem of one contact in 2D, in its local frame (n, t):
 // reaction r = (r_n, r_t), relative quantity x = (x_n, x_t) (a gap and slip increment at the
 // position level, a relative velocity at the velocity level), x = x_free + w r with an
-// isotropic local compliance w. Sign convention (literature 2.1): x_n > 0 separates, r_n >= 0
-// pushes apart, sliding gives r_t = -mu r_n sign(x_t). Pure functions, no state.
+// isotropic local compliance w. Sign convention (docs/background.md, The contact law and the
+// bi-potential): x_n > 0 separates, r_n >= 0 pushes apart, sliding gives r_t = -mu r_n sign(x_t).
+// Pure functions, no state.
 #pragma once
 
 #include <cmath>
@@ -17,9 +18,10 @@ struct LocalPair {
   double t = 0.0;
 };
 
-// Projection onto the Coulomb cone K_mu = {|r_t| <= mu r_n} (literature 2.3, after GetFEM's
-// De_Saxce_projection): inside -> unchanged (stick); in the polar cone -> 0 (separation);
-// otherwise onto the cone surface (slip). mu = 0 gives r_n = max(0, r*_n), r_t = 0.
+// Projection onto the Coulomb cone K_mu = {|r_t| <= mu r_n} (docs/background.md, Projection on
+// the Coulomb cone; after GetFEM's De_Saxce_projection): inside -> unchanged (stick); in the polar
+// cone -> 0 (separation); otherwise onto the cone surface (slip). mu = 0 gives
+// r_n = max(0, r*_n), r_t = 0.
 inline LocalPair project_coulomb(LocalPair r, double mu) {
   const double at = std::abs(r.t);
   if (r.n >= 0.0 && at <= mu * r.n) return r;  // r.n >= 0: with mu = 0, 0 <= 0 * r.n holds for r.n < 0
@@ -64,8 +66,9 @@ inline LocalSolution solve_local(LocalPair x_free, double w, double mu, double r
   return s;
 }
 
-// The fixed point of the iteration with rho = 1/w in closed form (literature 2.5, "impulse
-// return map"): r_n = max(0, -x_free_n / w), stick if the stick force fits in the cone.
+// The fixed point of the iteration with rho = 1/w in closed form ("impulse return map";
+// docs/background.md, Rigid obstacle: the closed-form fixed point): r_n = max(0, -x_free_n / w),
+// stick if the stick force fits in the cone.
 inline LocalPair closed_form_reaction(LocalPair x_free, double w, double mu) {
   const double rn = std::max(0.0, -x_free.n / w);
   const double rt_stick = -x_free.t / w;

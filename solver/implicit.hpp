@@ -1,5 +1,5 @@
-// The implicit reference scheme of the paper (FER/Impact; literature 2.6): the first-order
-// theta-scheme on velocities
+// The implicit reference scheme of the paper (FER/Impact; docs/background.md, The implicit
+// theta-scheme): the first-order theta-scheme on velocities
 //   M (v1 - v0) = dt [(1 - xi)(F - F_int)_0 + xi (F - F_int)_1] + dt R,
 //   u1 = u0 + dt [(1 - theta) v0 + theta v1],
 // solved by Newton with the consistent tangent A = M + theta xi dt^2 K_T + xi dt C assembled

@@ -14,8 +14,8 @@ namespace ricochet {
 enum class QuadElement { full_2x2, one_point_hourglass };
 enum class HourglassForm { viscous, stiffness };
 
-// Flanagan-Belytschko hourglass control of one-point Q4 (literature 3.3), with
-// q = sum_I gamma_I a_I (a = velocity for viscous, displacement for stiffness), Q = c q and
+// Flanagan-Belytschko hourglass control of one-point Q4 (docs/background.md, Hourglass control),
+// with q = sum_I gamma_I a_I (a = velocity for viscous, displacement for stiffness), Q = c q and
 // nodal forces f_I = gamma_I Q:
 //   viscous:   c = coeff * rho * c_p * t * sqrt(A0)           [kg/s]
 //   stiffness: c = coeff * rho * c_p^2 * t * A0 * (B:B) / 2   [N/m]
@@ -102,7 +102,7 @@ struct Model {
 // non-convex quadrilateral (naming the body and cell), or non-positive thickness/density.
 Model build_model(const std::vector<BodyInput>& bodies, PlaneMode plane, const Vec2& gravity);
 
-// Critical-step estimates of one reference cell (literature 3.2): Q4 uses
+// Critical-step estimates of one reference cell (docs/background.md, Critical time step): Q4 uses
 // L_e = sqrt(2) A / sqrt(d13^2 + d24^2) (Flanagan-Belytschko bound, diagonals d13, d24);
 // T3 uses the analogous bound of the lumped constant-strain triangle,
 // L_e = sqrt(2/3) 2 A / sqrt(eig_max(sum over edges e e^T)) (a/sqrt(3) for an equilateral

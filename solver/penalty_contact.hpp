@@ -1,11 +1,12 @@
-// Explicit penalty contact of body nodes with rigid obstacles, LS-DYNA style (literature 3.1,
-// the paper's comparison scheme). It plugs in where the bi-potential contact_phase() does:
-// after evaluate() gives the free accelerations at t_n, penalty_phase() adds the forces of
-// springs acting on the candidate nodes that lie behind an obstacle at u_n, and update()
-// integrates them like any other force. No contact condition is enforced: the penalty lets a
-// node penetrate until its spring balances the impact.
+// Explicit penalty contact of body nodes with rigid obstacles, LS-DYNA style (the paper's
+// comparison scheme; docs/background.md, Penalty contact). It plugs in where the bi-potential
+// contact_phase() does: after evaluate() gives the free accelerations at t_n, penalty_phase() adds
+// the forces of springs acting on the candidate nodes that lie behind an obstacle at u_n, and
+// update() integrates them like any other force. No contact condition is enforced: the penalty lets
+// a node penetrate until its spring balances the impact.
 //
-// Stiffness (2D form of LS-DYNA's SOFT = 0 rule k = f_si K A^2 / V, literature 3.1):
+// Stiffness (2D form of LS-DYNA's SOFT = 0 rule k = f_si K A^2 / V; docs/background.md,
+// Penalty contact):
 //   every boundary segment s (a cell edge used by exactly one cell) of a body has the
 //   segment stiffness
 //       k_s = f_si K (l_s e)^2 / (A_c e) = f_si K l_s^2 e / A_c,
@@ -24,11 +25,11 @@
 // so that a soft body meeting a stiff one, whose step is set by the stiff one, is not stopped by
 // springs scaled to its own small bulk modulus only.
 // Bulk modulus K: the 3D value K = lambda + 2 mu / 3 = E / (3 (1 - 2 nu)) of the material's
-// (E, nu), in plane stress and plane strain alike. LS-DYNA takes K from the material card
-// whatever the element formulation (its plane-stress solids, ELFORM 12, included), and the
-// literature's penetration estimate delta / h ~ sigma / (f_si K) uses this K, so f_si keeps its
-// LS-DYNA meaning here. (The plane-stress 2D bulk modulus lambda* + mu = E / (2 (1 - nu)) would
-// be 14 % smaller at nu = 0.3 and stays bounded as nu -> 1/2, where the 3D value diverges.)
+// (E, nu), in plane stress and plane strain alike. LS-DYNA takes K from the material card whatever
+// the element formulation (its plane-stress solids, ELFORM 12, included), and the penetration
+// estimate delta / h ~ sigma / (f_si K) (docs/background.md, Penalty contact) uses this K, so f_si
+// keeps its LS-DYNA meaning here. (The plane-stress 2D bulk modulus lambda* + mu = E / (2 (1 - nu))
+// would be 14 % smaller at nu = 0.3 and stays bounded as nu -> 1/2, where the 3D value diverges.)
 //
 // Forces at t_n, per candidate with (g, n) = closest(obstacle, X + u_n) (g = n . (x - point) for a
 // line; for circles and polylines n is the normal at the closest point, t = (n_y, -n_x), both

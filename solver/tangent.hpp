@@ -1,7 +1,8 @@
-// Linearisation of the element forces for implicit schemes (literature 2.6: each Newton
-// iteration solves (M + theta xi dt^2 K_T + xi dt C) dv = ...). One element pass assembles the
-// iteration matrix A = m_scale M + k_scale K_T + c_scale C into a sparse matrix of fixed pattern
-// and, in the same pass, the internal forces exactly as internal_forces computes them.
+// Linearisation of the element forces for implicit schemes (docs/background.md, The implicit
+// theta-scheme: each Newton iteration solves (M + theta xi dt^2 K_T + xi dt C) dv = ...). One
+// element pass assembles the iteration matrix A = m_scale M + k_scale K_T + c_scale C into a sparse
+// matrix of fixed pattern and, in the same pass, the internal forces exactly as internal_forces
+// computes them.
 // DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver.
 #pragma once
 

@@ -195,7 +195,8 @@ TEST(BodyContact, VertexContact) {
   }
 }
 
-// Two identical bars end to end (literature 4, B2b): a striker at v0 hits a bar at rest, mu = 0.
+// Two identical bars end to end (docs/background.md, Independent benchmarks, B2b): a striker at v0
+// hits a bar at rest, mu = 0.
 struct HeadOn {
   Model model;
   RunSettings settings;

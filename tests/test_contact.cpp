@@ -1,6 +1,7 @@
 // Verification of the frictional contact phase (solver/coulomb.hpp, solver/contact): the
-// projection onto the Coulomb cone against its closed form (literature 2.3), the fixed points
-// and convergence rate of the bi-potential predictor-corrector (literature 2.2, 2.5), the
+// projection onto the Coulomb cone against its closed form, the fixed points and convergence
+// rate of the bi-potential predictor-corrector (Cros et al. 2010, Eq. (5); docs/background.md,
+// Projection on the Coulomb cone, The predictor-corrector, Convergence of the iteration), the
 // Siconos reference value, and small hand-built bodies hitting the rigid line y = 0: no
 // penetration at the position level, exact x-momentum without friction, the Coulomb impulse
 // ratio while sliding, energy bookkeeping, and what the velocity level allows.
@@ -31,7 +32,8 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // ---------------------------------------------------------------------------------------------
 // project_coulomb
 
-// The closed form of literature 2.3, written out independently of the solver's branches.
+// The closed form of docs/background.md, Projection on the Coulomb cone, written out independently
+// of the solver's branches.
 LocalPair projection_reference(LocalPair r, double mu) {
   const double at = std::abs(r.t);
   if (at <= mu * r.n && r.n >= 0.0) return r;

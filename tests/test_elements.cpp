@@ -178,8 +178,8 @@ TEST(Elements, PatchTestHomogeneousDeformation) {
 }
 
 // A distorted convex quadrilateral (counter-clockwise) and its documented hourglass data,
-// computed independently of model.cpp: gamma from Flanagan-Belytschko eq. (72) (literature
-// 3.3), B_I = b_I / A with b_I = (y_{I+1} - y_{I-1}, x_{I-1} - x_{I+1}) / 2.
+// computed independently of model.cpp: gamma from Flanagan-Belytschko eq. (72) (docs/background.md,
+// Hourglass control), B_I = b_I / A with b_I = (y_{I+1} - y_{I-1}, x_{I-1} - x_{I+1}) / 2.
 struct QuadData {
   Eigen::Matrix<double, 2, 4> x;
   double area = 0.0;

@@ -70,7 +70,8 @@ TEST(Explicit, EnergyErrorIsSecondOrderInDt) {
               err[1], err[2], p1, p2);
   EXPECT_NEAR(p1, 2.0, 0.3);
   EXPECT_NEAR(p2, 2.0, 0.3);
-  // The error is small in absolute terms too (literature 3.4 accepts 1e-2).
+  // The error is small in absolute terms too (the balance check of docs/background.md, Energy
+  // accounting, accepts 1e-2).
   EXPECT_LT(err[0], 1e-2);
 }
 

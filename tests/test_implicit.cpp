@@ -1,9 +1,9 @@
-// Verification of the implicit theta-scheme (solver/implicit, literature 2.6) without contact:
-// energy conservation of the trapezoidal choice theta = xi = 1/2 at and far above the explicit
-// critical step, monotone numerical dissipation for theta = xi > 1/2, quadratic convergence of
-// Newton's method on a large-deformation step with both linear solvers, conservation of linear
-// momentum, agreement of the two linear solvers, free fall under gravity and the work of
-// prescribed velocities.
+// Verification of the implicit theta-scheme (solver/implicit; docs/background.md, The implicit
+// theta-scheme) without contact: energy conservation of the trapezoidal choice theta = xi = 1/2 at
+// and far above the explicit critical step, monotone numerical dissipation for theta = xi > 1/2,
+// quadratic convergence of Newton's method on a large-deformation step with both linear solvers,
+// conservation of linear momentum, agreement of the two linear solvers, free fall under gravity and
+// the work of prescribed velocities.
 //
 // The identity behind the energy tests: for a linear problem (f_int = K u) the scheme gives,
 // step by step,

@@ -1,6 +1,7 @@
-// The paper's test case end to end (Cros, Feng & Magnain 2010, section 3; literature 1):
-// cases/oblique_plate.toml through read_case, prepare_case and run_explicit, on the meshes
-// M1 (12 x 32) and M2 (36 x 91), frictionless and with mu = 0.1. Checks no penetration,
+// The paper's test case end to end (Cros, Feng & Magnain 2010, section 3; docs/background.md, The
+// oblique-plate case): cases/oblique_plate.toml through read_case, prepare_case and run_explicit,
+// on the meshes M1 (12 x 32) and M2 (36 x 91), frictionless and with mu = 0.1. Checks no
+// penetration,
 // the 2 % energy error the paper reports, exact x-momentum without friction, the divergence
 // pattern over the paper's time steps against the critical step, friction slowing the
 // rebound, and the energy bookkeeping of the contact phase row by row.

@@ -1,6 +1,6 @@
-// Verification of the explicit penalty contact phase (solver/penalty_contact, the paper's
-// LS-DYNA comparison scheme, literature 3.1-3.4): the stiffness k = f_si K l^2 e / A_c on known
-// cells, penetration against f_si, the time-step limit of the contact springs, energy
+// Verification of the explicit penalty contact phase (solver/penalty_contact, the paper's LS-DYNA
+// comparison scheme, docs/background.md, Penalty contact): the stiffness k = f_si K l^2 e / A_c on
+// known cells, penetration against f_si, the time-step limit of the contact springs, energy
 // conservation with the stored penalty energy and the friction dissipation, momentum without
 // friction, the Coulomb cap of the tangential spring, and no heap allocation in the phase.
 // Small hand-built blocks hit the rigid line y = 0 (normal +y, tangent +x), stepped by hand:
@@ -286,7 +286,7 @@ TEST(PenaltyImpact, BlockBouncesBackAndPenetrationShrinksWithScaleFactor) {
   // and d = the rigid-body value, exponent 1/2; for stiff springs the bottom nodes bounce on
   // their own springs before the body follows (m_eff -> the nodal mass), exponent 1/2 again;
   // in between m_eff is the mass the stress wave reaches during the contact, which shrinks with
-  // f_si, so the exponent rises towards 1 (the literature's delta / h ~ sigma / (f_si K) of a
+  // f_si, so the exponent rises towards 1 (the estimate delta / h ~ sigma / (f_si K) of a
   // wave-dominated impact). Measured (dt 0.2 x min or x combined: the same to 0.1 %):
   //   f_si  0.01   0.1    1      10     100
   //   d/um  48.98  15.31  3.104  0.854  0.272

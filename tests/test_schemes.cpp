@@ -90,8 +90,9 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
   // <= 1e-16 m). The penalty lets nodes in: a spring k = f_si K l^2 e / A_c per boundary
   // segment holds the impact pressure sigma = rho c_p v_n over the node's l e at
   //   delta = sigma l e / (f_si K e l / h_y) = rho c_p v_n h_y / (f_si K)
-  // (literature 3.1's delta / h ~ sigma / (f_si K) with h the cell height h_y = 82 mm / 32
-  // at the centre): 1.98 mm. Measured 2.21 mm at both mu; accepted 0.5 .. 2 x the estimate.
+  // (docs/background.md, Penalty contact: delta / h ~ sigma / (f_si K) with h the cell height h_y =
+  // 82 mm / 32 at the centre): 1.98 mm. Measured 2.21 mm at both mu; accepted 0.5 .. 2 x the
+  // estimate.
   // The automatic penalty step is 0.9 x the combined element/spring limit
   // 1/sqrt(1/dt_e^2 + 1/dt_p^2), hence <= 0.9 x min(dt_e, dt_p) (measured 1.703e-5 s against
   // dt_e = 1.921e-5 s, dt_p = 1.087e-4 s). Energy error: the paper's 2 % for every scheme
