@@ -223,7 +223,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   const TableReader root(doc, "", ctx);
   c.name = root.text("name", std::filesystem::path(file).stem().string());
   c.description = root.text("description", "");
-  c.scheme = root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"});
+  c.scheme = scheme_from_name(root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"}));
   c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
                                                                               : PlaneMode::strain;
   c.gravity = root.vec2("gravity", Vec2::Zero());
@@ -282,7 +282,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     if (cp.slave == cp.master) t.fail("master", "must differ from slave (self-contact is not treated)");
     c.contact_pairs.push_back(std::move(cp));
   }
-  if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == "explicit")
+  if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == Scheme::plain_explicit)
     root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] or [[contact_pairs]] need "
                         "\"semi_explicit\", \"implicit\" or \"explicit_penalty\"");
   if (const auto ct = root.table("contact")) {
@@ -355,6 +355,23 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   root.finish();
   return c;
+}
+
+const char* scheme_name(Scheme s) {
+  switch (s) {
+    case Scheme::semi_explicit: return "semi_explicit";
+    case Scheme::implicit: return "implicit";
+    case Scheme::explicit_penalty: return "explicit_penalty";
+    case Scheme::plain_explicit: break;
+  }
+  return "explicit";
+}
+
+Scheme scheme_from_name(const std::string& name) {
+  if (name == "semi_explicit") return Scheme::semi_explicit;
+  if (name == "implicit") return Scheme::implicit;
+  if (name == "explicit_penalty") return Scheme::explicit_penalty;
+  return Scheme::plain_explicit;
 }
 
 }  // namespace ricochet

@@ -139,7 +139,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   }
   s.contact = c.contact;
   s.penalty = c.penalty;
-  s.contact_method = c.scheme == "explicit_penalty" ? RunSettings::ContactMethod::penalty
+  s.contact_method = c.scheme == Scheme::explicit_penalty ? RunSettings::ContactMethod::penalty
                                                     : RunSettings::ContactMethod::bipotential;
   // The automatic step: safety x the elements' estimate; with penalty contact, safety x the
   // combined limit 1/sqrt(1/dt_e^2 + 1/dt_p^2) of elements and springs (dt_p = min 2 sqrt(m/k)):
@@ -180,7 +180,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
 }
 
 RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
-  if (pc.spec.scheme == "implicit") return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
+  if (pc.spec.scheme == Scheme::implicit) return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
   return run_explicit(pc.model, pc.settings, progress);
 }
 

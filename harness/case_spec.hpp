@@ -17,6 +17,20 @@
 
 namespace ricochet {
 
+// The time-integration scheme of a case (case key `scheme`, docs/case-format.md), parsed once.
+enum class Scheme {
+  plain_explicit,    // "explicit": central differences, no contact
+  semi_explicit,     // "semi_explicit": central differences, bi-potential contact (the paper's)
+  implicit,          // "implicit": the first-order theta-scheme
+  explicit_penalty,  // "explicit_penalty": central differences, penalty springs
+};
+
+// The case-file name of a scheme: "explicit", "semi_explicit", "implicit", "explicit_penalty".
+const char* scheme_name(Scheme s);
+
+// The scheme of a case-file name; the reader has checked it is one of the four.
+Scheme scheme_from_name(const std::string& name);
+
 struct GmshFile {
   std::filesystem::path path;  // resolved against the case file's folder
 };
@@ -97,7 +111,7 @@ struct CaseSpec {
   std::string description;
   std::vector<std::string> overrides;  // the --set arguments, in order
 
-  std::string scheme = "explicit";
+  Scheme scheme = Scheme::plain_explicit;
   PlaneMode plane = PlaneMode::stress;
   Vec2 gravity = Vec2::Zero();  // [m/s^2]
 

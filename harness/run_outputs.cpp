@@ -91,7 +91,7 @@ Json case_identity(const PreparedCase& pc) {
   Json overrides = Json::array();
   for (const auto& o : c.overrides) overrides.push_back(o);
   j["overrides"] = overrides;
-  j["scheme"] = c.scheme;
+  j["scheme"] = scheme_name(c.scheme);
   j["mesh"] = joined_bodies(c, false);
   j["element"] = joined_bodies(c, true);
   return j;
@@ -109,7 +109,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
   j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
   const bool any_contact = !pc.settings.obstacles.empty() || !pc.settings.body_pairs.empty();
-  j["contact_level"] = !any_contact || pc.spec.scheme == "explicit_penalty" ? Json()
+  j["contact_level"] = !any_contact || pc.spec.scheme == Scheme::explicit_penalty ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
@@ -132,7 +132,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   } else {
     j["diverged"] = nullptr;
   }
-  if (pc.spec.scheme == "implicit") {
+  if (pc.spec.scheme == Scheme::implicit) {
     Json im = Json::object();
     im["theta"] = pc.spec.implicit.theta;
     im["xi"] = pc.spec.implicit.xi;
@@ -144,7 +144,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   } else {
     j["implicit"] = nullptr;
   }
-  if (pc.spec.scheme == "explicit_penalty") {
+  if (pc.spec.scheme == Scheme::explicit_penalty) {
     j["penalty_scale_factor"] = pc.spec.penalty.scale_factor;
     j["penalty_soft_scale"] = pc.settings.penalty.soft_scale;
     j["penalty_soft_dt"] = pc.settings.penalty.soft_scale > 0.0 ? Json(pc.settings.penalty.soft_dt) : Json();

@@ -47,7 +47,7 @@ std::string fmt(const char* format, double v) {
 }
 
 bool uses_penalty_estimate(const PreparedCase& pc) {
-  return pc.spec.scheme == "explicit_penalty" && std::isfinite(pc.penalty_critical_dt) &&
+  return pc.spec.scheme == Scheme::explicit_penalty && std::isfinite(pc.penalty_critical_dt) &&
          pc.penalty_critical_dt > 0.0;
 }
 
@@ -276,7 +276,7 @@ Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const
 }
 
 std::string stability_summary_line(const PreparedCase& pc, const StabilityResult& r) {
-  std::string s = pc.spec.name + ": " + pc.spec.scheme + " " + joined_bodies(pc.spec, false) + " " +
+  std::string s = pc.spec.name + ": " + scheme_name(pc.spec.scheme) + " " + joined_bodies(pc.spec, false) + " " +
                   joined_bodies(pc.spec, true) + "  estimate " + fmt("%.4g", r.estimate) + " s";
   auto ratio = [&](double dt) { return fmt("%.4g", dt) + " s (" + fmt("%.4g", dt / r.estimate) + " x)"; };
   switch (r.outcome) {

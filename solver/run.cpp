@@ -7,20 +7,6 @@
 
 namespace ricochet {
 
-std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
-  std::vector<std::string> c = {"time",          "kinetic_energy",  "strain_energy",
-                                "hourglass_energy", "external_work", "friction_dissipation",
-                                "total_energy",  "energy_error",    "momentum_x",
-                                "momentum_y",    "von_mises_max",   "penetration_max",
-                                "contact_nodes", "normal_force",    "tangential_force",
-                                "contact_work",  "contact_stick",   "contact_slip",
-                                "contact_iterations", "contact_energy", "angular_momentum",
-                                "contact_work_normal"};
-  for (const auto& p : probes)
-    for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
-  return c;
-}
-
 std::size_t History::column(const std::string& name) const {
   const auto it = std::find(columns.begin(), columns.end(), name);
   if (it == columns.end()) throw std::out_of_range("no history column '" + name + "'");

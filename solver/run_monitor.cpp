@@ -128,7 +128,58 @@ void locate_cell(const Model& model, const State& s, int cell, StressPeak& p) {
     if (find(b)) return;
 }
 
+// What a history row is made of at a sample step.
+struct HistoryInputs {
+  const State& s;
+  const Energies& e;
+  const ContactReport& c;
+  double energy_error = 0.0;      // [-]
+  Vec2 momentum = Vec2::Zero();   // [kg m/s]
+  double von_mises = 0.0;         // [Pa]
+  double penetration = 0.0;       // [m]
+  double angular_momentum = 0.0;  // [kg m^2/s]
+};
+
+// The history's columns before the probes', in order, each with its value: the one definition
+// of a history row (docs/outputs.md, history.csv). fn(name, value) is called per column; with
+// x null only the names are wanted (the values are 0).
+template <class Fn>
+void history_fields(const HistoryInputs* x, Fn&& fn) {
+  auto of = [x](auto get) { return x ? get(*x) : 0.0; };
+  using X = HistoryInputs;
+  fn("time", of([](const X& h) { return h.s.time; }));
+  fn("kinetic_energy", of([](const X& h) { return h.e.kinetic; }));
+  fn("strain_energy", of([](const X& h) { return h.e.strain; }));
+  fn("hourglass_energy", of([](const X& h) { return h.e.hourglass; }));
+  fn("external_work", of([](const X& h) { return h.e.external_work; }));
+  fn("friction_dissipation", of([](const X& h) { return h.e.friction_dissipation; }));
+  fn("total_energy", of([](const X& h) { return h.e.total(); }));
+  fn("energy_error", of([](const X& h) { return h.energy_error; }));
+  fn("momentum_x", of([](const X& h) { return h.momentum.x(); }));
+  fn("momentum_y", of([](const X& h) { return h.momentum.y(); }));
+  fn("von_mises_max", of([](const X& h) { return h.von_mises; }));
+  fn("penetration_max", of([](const X& h) { return h.penetration; }));
+  fn("contact_nodes", of([](const X& h) { return static_cast<double>(h.c.active); }));
+  fn("normal_force", of([](const X& h) { return h.c.normal_force; }));
+  fn("tangential_force", of([](const X& h) { return h.c.tangential_force; }));
+  fn("contact_work", of([](const X& h) { return h.c.contact_work; }));
+  fn("contact_stick", of([](const X& h) { return static_cast<double>(h.c.stick); }));
+  fn("contact_slip", of([](const X& h) { return static_cast<double>(h.c.slip); }));
+  fn("contact_iterations", of([](const X& h) { return static_cast<double>(h.c.iterations); }));
+  fn("contact_energy", of([](const X& h) { return h.c.contact_energy; }));
+  fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
+  fn("contact_work_normal", of([](const X& h) { return h.c.contact_work_normal; }));
+}
+
 }  // namespace
+
+std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
+  std::vector<std::string> c;
+  history_fields(nullptr, [&c](const char* name, double) { c.emplace_back(name); });
+  for (const auto& p : probes)
+    for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
+  return c;
+}
 
 RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
                        const std::vector<ContactCandidate>* candidates, const std::vector<Surface>* surfaces)
@@ -239,14 +290,9 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
     const double vm = std::sqrt(last_peaks_.all);
     max_into(result_.von_mises_sampled_max, von_mises_maxima(model_, s.u.data()));
     const double depth = candidates_ ? penetration(model_, settings_.obstacles, surfaces_ ? *surfaces_ : kNoSurfaces, *candidates_, s.u) : 0.0;
-    const Vec2 p = linear_momentum(model_, s);
     auto& v = result_.history.values;
-    v.insert(v.end(), {s.time, e.kinetic, e.strain, e.hourglass, e.external_work,
-                       e.friction_dissipation, e.total(), error, p.x(), p.y(), vm, depth,
-                       static_cast<double>(c.active), c.normal_force, c.tangential_force,
-                       c.contact_work, static_cast<double>(c.stick), static_cast<double>(c.slip),
-                       static_cast<double>(c.iterations), c.contact_energy,
-                       angular_momentum(model_, s), c.contact_work_normal});
+    const HistoryInputs row{s, e, c, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
+    history_fields(&row, [&v](const char*, double value) { v.push_back(value); });
     for (const auto& pr : settings_.probes) {
       const int d = 2 * pr.node;
       v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});
