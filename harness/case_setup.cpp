@@ -141,20 +141,15 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   s.penalty = c.penalty;
   s.contact_method = c.scheme == Scheme::explicit_penalty ? RunSettings::ContactMethod::penalty
                                                     : RunSettings::ContactMethod::bipotential;
-  // The automatic step: safety x the elements' estimate; with penalty contact, safety x the
-  // combined limit 1/sqrt(1/dt_e^2 + 1/dt_p^2) of elements and springs (dt_p = min 2 sqrt(m/k)):
-  // min(dt_e, dt_p) alone is not stable when the two are close (tests/test_penalty_contact.cpp).
-  s.dt = stable_time_step(p.model, c.dt_safety);
   // The soft constraint's springs k1 = soft_scale m / (2 dt^2) use the step the run would have
   // without them: the elements' automatic step, or the fixed time.dt (LS-DYNA: the initial step).
-  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto ? s.dt : *c.dt;
-  if (s.contact_method == RunSettings::ContactMethod::penalty && (!s.obstacles.empty() || !s.body_pairs.empty())) {
-    const PenaltyState springs =
-        make_penalty_state(p.model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
-    p.penalty_critical_dt = penalty_critical_dt(p.model, springs);
-    s.dt = penalty_stable_time_step(p.model, springs, c.dt_safety);
-  }
-  if (!p.dt_auto) s.dt = *c.dt;
+  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto ? stable_time_step(p.model, c.dt_safety) : *c.dt;
+  // The automatic step: safety x the solver's critical step, which with penalty contact is the
+  // combined limit of elements and springs (min(dt_e, dt_p) alone is not stable when the two
+  // are close: tests/test_penalty_contact.cpp).
+  // It also gives the springs' own limit, which the summary reports for fixed steps too.
+  const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
+  s.dt = p.dt_auto ? c.dt_safety * critical : *c.dt;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");

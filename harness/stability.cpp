@@ -88,10 +88,8 @@ void check_stability_options(const StabilityOptions& o) {
 }
 
 double stability_estimate(const PreparedCase& pc) {
-  const double de = pc.model.critical_dt;
-  if (!uses_penalty_estimate(pc)) return de;
-  const double dp = pc.penalty_critical_dt;
-  return 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp));
+  if (!uses_penalty_estimate(pc)) return pc.model.critical_dt;
+  return critical_time_step(pc.model, pc.settings);
 }
 
 PreparedCase stability_trial_case(const PreparedCase& pc, double dt, const StabilityOptions& opt) {

@@ -13,6 +13,15 @@ std::size_t History::column(const std::string& name) const {
   return static_cast<std::size_t>(it - columns.begin());
 }
 
+double critical_time_step(const Model& model, const RunSettings& settings, double* penalty_critical) {
+  const bool contact = !settings.obstacles.empty() || !settings.body_pairs.empty();
+  if (settings.contact_method != RunSettings::ContactMethod::penalty || !contact) return model.critical_dt;
+  const PenaltyState springs = make_penalty_state(model, settings.obstacles, settings.friction, settings.prescribed,
+                                                  settings.penalty, settings.body_pairs);
+  if (penalty_critical) *penalty_critical = penalty_critical_dt(model, springs);
+  return penalty_combined_critical_dt(model, springs);
+}
+
 void copy_contact_totals(const ContactState& c, RunResult& r) {
   r.friction_dissipation = c.friction_dissipation;
   r.contact_work = c.contact_work;
