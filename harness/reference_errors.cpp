@@ -1,5 +1,7 @@
 #include "harness/reference_errors.hpp"
 
+#include "harness/csv_reader.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -61,38 +63,17 @@ int HistoryTable::column(std::string_view name) const {
 }
 
 HistoryTable read_history_csv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot read");
+  const CsvTable t = read_csv(path);  // the project's one CSV reader (RFC 4180)
   HistoryTable h;
-  auto split = [](const std::string& line) {
-    std::vector<std::string> f;
-    std::string cur;
-    for (char c : line) {
-      if (c == ',') {
-        f.push_back(cur);
-        cur.clear();
-      } else if (c != '\r') {
-        cur += c;
-      }
-    }
-    f.push_back(cur);
-    return f;
-  };
-  std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error(path.string() + ": empty file");
-  h.columns = split(line);
-  for (std::size_t n = 2; std::getline(in, line); ++n) {
-    if (line.empty()) continue;
-    const auto f = split(line);
-    if (f.size() != h.columns.size())
-      throw std::runtime_error(path.string() + ":" + std::to_string(n) + ": " + std::to_string(f.size()) +
-                               " fields; the header has " + std::to_string(h.columns.size()));
+  h.columns = t.columns;
+  h.rows.reserve(t.rows.size());
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
     std::vector<double> row;
-    for (const auto& s : f) {
-      char* end = nullptr;
-      const double x = std::strtod(s.c_str(), &end);
-      if (s.empty() || *end != '\0') throw std::runtime_error(path.string() + ":" + std::to_string(n) + ": not a number: '" + s + "'");
-      row.push_back(x);
+    row.reserve(t.columns.size());
+    for (const std::string& cell : t.rows[r]) {
+      const std::optional<double> x = parse_csv_number(cell);
+      if (!x) throw std::runtime_error(path.string() + ":" + std::to_string(t.lines[r]) + ": not a number: '" + cell + "'");
+      row.push_back(*x);
     }
     h.rows.push_back(std::move(row));
   }

@@ -22,7 +22,8 @@ struct HistoryTable {
   int column(std::string_view name) const;  // index, or -1
 };
 
-// Reads a history.csv (docs/outputs.md). Throws std::runtime_error naming the file.
+// Reads a history.csv (docs/outputs.md) with the CSV reader of csv_reader.hpp, every cell a number.
+// Throws std::runtime_error (InputError for the CSV syntax) naming the file and line.
 HistoryTable read_history_csv(const std::filesystem::path& path);
 
 struct ReferenceErrors {
