@@ -743,7 +743,7 @@ int run_gates(const CsvTable& table, const GateFile& gates, const fs::path& juni
 }
 
 int check_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  try {
+  return command_status(err, [&]() -> int {
     std::vector<std::string> files;
     std::string junit;
     for (std::size_t i = 0; i < args.size(); ++i) {
@@ -771,16 +771,13 @@ int check_command(const std::vector<std::string>& args, std::ostream& out, std::
     const CsvTable table = read_csv(files[0]);
     const GateFile gates = read_gates(files[1]);
     const fs::path junit_path = junit.empty() ? fs::path(files[0]).parent_path() / "gates-junit.xml" : fs::path(junit);
+    // Once both inputs are read, whatever fails (e.g. writing the JUnit file) is not bad input.
     try {
       return run_gates(table, gates, junit_path, out);
     } catch (const std::exception& e) {
-      err << "ricochet: error: " << e.what() << '\n';
-      return 1;
+      throw std::runtime_error(e.what());
     }
-  } catch (const InputError& e) {
-    err << "ricochet: " << e.what() << '\n';
-    return 2;
-  }
+  });
 }
 
 int check_command(const std::vector<std::string>& args) { return check_command(args, std::cout, std::cerr); }

@@ -124,7 +124,7 @@ int run_command(const std::vector<std::string>& args) {
     else if (case_file.empty()) case_file = a;
     else throw ricochet::InputError("ricochet run: more than one case file ('" + case_file + "', '" + a + "')");
   }
-  if (case_file.empty()) throw ricochet::InputError("ricochet run: missing CASE.toml\n" + std::string(kUsage));
+  if (case_file.empty()) throw ricochet::InputError("ricochet run: missing CASE.toml; usage: ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet] (--help for more)");
 
   const ricochet::CaseSpec spec = ricochet::read_case(case_file, sets);
   const ricochet::PreparedCase pc = ricochet::prepare_case(spec);
@@ -143,7 +143,7 @@ int run_command(const std::vector<std::string>& args) {
 
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
-  try {
+  return ricochet::command_status(std::cerr, [&]() -> int {
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
       std::fputs(kUsage, args.empty() ? stderr : stdout);
       return args.empty() ? 2 : 0;
@@ -160,11 +160,5 @@ int main(int argc, char** argv) {
     if (args[0] == "plot") return python_command("plot_run.py", {args.begin() + 1, args.end()});
     throw ricochet::InputError("ricochet: unknown command '" + args[0] +
                                "'; allowed: run, sweep, check, stability, report, plot, --version, --help");
-  } catch (const ricochet::InputError& e) {
-    std::fprintf(stderr, "ricochet: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ricochet: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <ctime>
 #include <filesystem>
 #include <limits>
@@ -300,7 +301,7 @@ std::string stability_summary_line(const PreparedCase& pc, const StabilityResult
 }
 
 int stability_command(const std::vector<std::string>& args) {
-  try {
+  return command_status(std::cerr, [&]() -> int {
     std::string case_file, out_dir;
     std::vector<std::string> sets;
     StabilityOptions opt;
@@ -340,7 +341,7 @@ int stability_command(const std::vector<std::string>& args) {
       else if (case_file.empty()) case_file = a;
       else throw InputError("ricochet stability: more than one case file ('" + case_file + "', '" + a + "')");
     }
-    if (case_file.empty()) throw InputError("ricochet stability: missing CASE.toml\n" + std::string(kUsage));
+    if (case_file.empty()) throw InputError("ricochet stability: missing CASE.toml; usage: ricochet stability CASE.toml [options] (--help for all)");
     check_stability_options(opt);
 
     const CaseSpec spec = read_case(case_file, sets);
@@ -375,13 +376,7 @@ int stability_command(const std::vector<std::string>& args) {
       case StabilityOutcome::no_unstable_up_to_cap: return 5;
       default: return 4;
     }
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "ricochet: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ricochet: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace ricochet

@@ -940,7 +940,7 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
 }
 
 int sweep_command(const std::vector<std::string>& args) {
-  try {
+  return command_status(std::cerr, [&]() -> int {
     std::string file, gates_file;
     SweepOptions opt;
     for (std::size_t i = 0; i < args.size(); ++i) {
@@ -980,13 +980,7 @@ int sweep_command(const std::vector<std::string>& args) {
     if (!gates) return 0;
     const CsvTable table = read_csv(opt.out_dir / "summary.csv");
     return run_gates(table, *gates, opt.out_dir / "gates-junit.xml", std::cout);
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "ricochet: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ricochet: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace ricochet
