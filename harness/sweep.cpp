@@ -309,7 +309,7 @@ class Sweep {
 
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       Record& rec = recs_[i];
-      if (!opt_.force && load_finished(folder(i), request(i), opt_.repeat, rec)) {
+      if (!opt_.force && load_finished(folder(i), request(i), repeats(i), rec)) {
         rec.state = Record::State::done;
         rec.resumed = true;
         ++out_.resumed;
@@ -333,7 +333,7 @@ class Sweep {
       if (refs) *log_ << " (" << refs << " reference)";
       *log_ << ", " << out_.resumed << " done before, " << queue.size() << " to run, "
             << (opt_.jobs == 1 ? std::string("one at a time") : std::to_string(opt_.jobs) + " in parallel");
-      if (opt_.repeat > 1) *log_ << ", each " << opt_.repeat << " times";
+      if (opt_.repeat > 1) *log_ << ", each " << opt_.repeat << " times (reference runs once)";
       *log_ << " -> " << opt_.out_dir.string() << std::endl;
     }
 
@@ -375,8 +375,11 @@ class Sweep {
 
   fs::path folder(std::size_t i) const { return opt_.out_dir / runs_[i].folder(); }
   std::string request(std::size_t i) const {
-    return request_text(runs_[i], opt_.repeat, base_hash_.at(runs_[i].base));
+    return request_text(runs_[i], repeats(i), base_hash_.at(runs_[i].base));
   }
+  // --repeat K times each run; a reference run once: its errors are the point, its timing is
+  // not compared with anything.
+  int repeats(std::size_t i) const { return runs_[i].is_reference ? 1 : opt_.repeat; }
 
   void lock() {
     const fs::path p = opt_.out_dir / "sweep.lock";
@@ -395,7 +398,7 @@ class Sweep {
   }
 
   void start(Task& t) {
-    const fs::path dir = repeat_dir(folder(t.run), opt_.repeat, t.k);
+    const fs::path dir = repeat_dir(folder(t.run), repeats(t.run), t.k);
     fs::create_directories(dir);
     t.started = Clock::now();
     t.pid = spawn_run(exe_, runs_[t.run], dir);
@@ -448,17 +451,17 @@ class Sweep {
       const auto [a, status] = wait_one(active);
       Task& t = active[a];
       t.wall += seconds(Clock::now() - t.started);
-      const fs::path dir = repeat_dir(folder(t.run), opt_.repeat, t.k);
+      const fs::path dir = repeat_dir(folder(t.run), repeats(t.run), t.k);
       Record& rec = recs_[t.run];
       if (const std::optional<JsonValue> s = finished(decode(status), dir, rec)) {
         t.walls.push_back(json_number(*s, "wall_seconds"));
         t.cpus.push_back(json_number(*s, "cpu_seconds"));
-        if (t.k < opt_.repeat) {
+        if (t.k < repeats(t.run)) {
           ++t.k;
           start(t);
           continue;
         }
-        if (opt_.repeat > 1) {
+        if (repeats(t.run) > 1) {
           const fs::path f = folder(t.run);
           if (fs::exists(dir / "history.csv")) link_or_copy(dir / "history.csv", f / "history.csv");
           if (fs::exists(dir / "fields")) link_or_copy(dir / "fields", f / "fields");

@@ -174,9 +174,10 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
 
 namespace {
 
-// Calls fn(global cell, the cell's squared von Mises equivalents: max over its integration points).
-template <class Fn>
-void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
+// Calls fn(global cell, the cell's value): the largest over its integration points of
+// point(material, F, P, det F), a VonMises2 (max_into combines the points).
+template <class Point, class Fn>
+void for_each_cell_stress(const Model& model, const double* u, Point&& point, Fn&& fn) {
   // One-point cells (Q4 with hourglass control, T3): F at the centroid.
   auto one_point = [&]<int N>(const auto& blocks) {
     for (const auto& b : blocks)
@@ -184,7 +185,7 @@ void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
           [&](const auto& mat) {
             for (std::size_t e = 0; e < b.conn.size(); ++e) {
               const Mat2 F = deformation_gradient<N>(gather<N>(u, b.conn[e]), b.geom[e].dndx);
-              fn(b.first_cell + static_cast<int>(e), von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+              fn(b.first_cell + static_cast<int>(e), point(mat, F, mat.first_piola(F), F.determinant()));
             }
           },
           b.material);
@@ -199,7 +200,7 @@ void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
             VonMises2 vm2{0.0, 0.0, 0.0};
             for (int q = 0; q < 4; ++q) {
               const Mat2 F = deformation_gradient<4>(ue, b.geom[e].dndx[q]);
-              max_into(vm2, von_mises_squared(mat, F, mat.first_piola(F), F.determinant()));
+              max_into(vm2, point(mat, F, mat.first_piola(F), F.determinant()));
             }
             fn(b.first_cell + static_cast<int>(e), vm2);
           }
@@ -207,17 +208,30 @@ void for_each_cell_stress(const Model& model, const double* u, Fn&& fn) {
         b.material);
 }
 
+// The point value with only `measure`'s entry filled (the others 0): one measure's work.
+auto one_measure(StressMeasure measure) {
+  return [measure](const auto& mat, const Mat2& F, const Mat2& P, double det_f) {
+    VonMises2 v{0.0, 0.0, 0.0};
+    v[static_cast<int>(measure)] = von_mises_ratio(mat, F, P, det_f, measure).value();
+    return v;
+  };
+}
+
+const auto all_measures = [](const auto& mat, const Mat2& F, const Mat2& P, double det_f) {
+  return von_mises_squared(mat, F, P, det_f);
+};
+
 }  // namespace
 
 void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out) {
   const int m = static_cast<int>(measure);
-  for_each_cell_stress(model, u, [&](int cell, const VonMises2& vm2) { out[cell] = std::sqrt(vm2[m]); });
+  for_each_cell_stress(model, u, one_measure(measure), [&](int cell, const VonMises2& vm2) { out[cell] = std::sqrt(vm2[m]); });
 }
 
 StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress) {
   StressPeaks p;
   const int m = static_cast<int>(stress.measure);
-  for_each_cell_stress(model, u, [&](int cell, const VonMises2& vm2) {
+  for_each_cell_stress(model, u, one_measure(stress.measure), [&](int cell, const VonMises2& vm2) {
     p.add(VonMisesRatio{vm2[m], 1.0}, cell, stress.contact_cell && stress.contact_cell[cell] != 0);
   });
   return p;
@@ -225,7 +239,7 @@ StressPeaks stress_peaks(const Model& model, const double* u, const StressTracki
 
 VonMises2 von_mises_maxima(const Model& model, const double* u) {
   VonMises2 m{0.0, 0.0, 0.0};
-  for_each_cell_stress(model, u, [&](int, const VonMises2& vm2) { max_into(m, vm2); });
+  for_each_cell_stress(model, u, all_measures, [&](int, const VonMises2& vm2) { max_into(m, vm2); });
   for (double& x : m) x = std::sqrt(x);
   return m;
 }

@@ -274,17 +274,10 @@ Eigen::Matrix4d material_tangent(const Material& m, const Mat2& F) {
   return std::visit([&F](const auto& x) { return x.tangent(F); }, m);
 }
 
-double von_mises(const Material& m, const Mat2& F) {
+double von_mises(const Material& m, const Mat2& F, StressMeasure measure) {
   return std::visit(
-      [&F](const auto& mat) {
-        const Mat2 P = mat.first_piola(F);
-        const OutOfPlane o = mat.out_of_plane(F);
-        const double j = F.determinant() * o.stretch;
-        const Mat2 s = P * F.transpose() / j;  // in-plane Cauchy stress
-        const double s33 = o.stretch * o.stretch * o.pk2 / j;
-        const double d1 = s(0, 0) - s(1, 1), d2 = s(1, 1) - s33, d3 = s33 - s(0, 0);
-        const double shear = 0.5 * (s(0, 1) + s(1, 0));
-        return std::sqrt(0.5 * (d1 * d1 + d2 * d2 + d3 * d3) + 3.0 * shear * shear);
+      [&](const auto& mat) {
+        return std::sqrt(von_mises_ratio(mat, F, mat.first_piola(F), F.determinant(), measure).value());
       },
       m);
 }

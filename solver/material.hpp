@@ -17,6 +17,7 @@
 #include <cmath>
 #include <variant>
 
+#include "solver/stress.hpp"
 #include "solver/types.hpp"
 
 namespace ricochet {
@@ -265,7 +266,8 @@ double material_wave_speed(const Material& m);
 // A = dP/dF of the material at F, indexed A(2*i + J, 2*k + L) = dP_iJ / dF_kL [Pa].
 Eigen::Matrix4d material_tangent(const Material& m, const Mat2& F);
 
-// Cauchy stress of the in-plane F and the von Mises equivalent of the full 3D state [Pa].
-double von_mises(const Material& m, const Mat2& F);
+// The von Mises equivalent of the full 3D stress state at F, of `measure` (stress.hpp: the one
+// formula the force pass and the fields use) [Pa].
+double von_mises(const Material& m, const Mat2& F, StressMeasure measure = StressMeasure::cauchy);
 
 }  // namespace ricochet

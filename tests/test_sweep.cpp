@@ -733,6 +733,28 @@ cross = { "time.dt" = [1e-5] }
   EXPECT_EQ(read_table(out() / "summary.csv").rows[0].at("wall_seconds"), r.at("wall_seconds"));
 }
 
+// A reference run is run once whatever --repeat says: its timing is not compared with anything.
+TEST_F(SweepTest, ReferenceRunsAreNotRepeated) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "r"
+cross = { "time.dt" = [2e-5] }
+reference = { "time.dt" = 1e-5 }
+)";
+  const SweepOutcome o = run(sweep, 1, 3);
+  EXPECT_EQ(o.executed, 2u);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.row("r/reference-time.dt=1e-5").at("repeats"), "1");
+  EXPECT_EQ(t.row("r/000-time.dt=2e-5").at("repeats"), "3");
+  EXPECT_FALSE(fs::exists(out() / "runs/r/reference-time.dt=1e-5/repeat-1"));
+  EXPECT_TRUE(fs::exists(out() / "runs/r/000-time.dt=2e-5/repeat-3/summary.json"));
+  EXPECT_FALSE(t.row("r/000-time.dt=2e-5").at("error_probe_P").empty());
+  // Resumed with the same --repeat: nothing runs again.
+  EXPECT_EQ(run(sweep, 1, 3).resumed, 2u);
+}
+
 TEST_F(SweepTest, ErrorsAgainstTheReferenceAreZeroAtItsStepAndShrinkWithDt) {
   const SweepOutcome o = run(R"(
 base = "case.toml"
