@@ -5,6 +5,7 @@
 
 #include "harness/gmsh_reader.hpp"
 #include "harness/input_error.hpp"
+#include "solver/time_step.hpp"
 
 namespace ricochet {
 namespace {

@@ -12,6 +12,7 @@
 #include "harness/atomic_file.hpp"
 #include "harness/input_error.hpp"
 #include "harness/run_outputs.hpp"
+#include "solver/time_step.hpp"
 
 namespace ricochet {
 namespace {

@@ -3,43 +3,15 @@
 #include <algorithm>
 #include <map>
 #include <stdexcept>
-#include <utility>
 
 namespace ricochet {
 
-namespace {
-
-// Every cell edge of `body` in the cell's (counter-clockwise) order, counted over both directions.
-template <class Block>
-void count_edges(const std::vector<Block>& blocks, int body, std::map<std::pair<int, int>, int>& uses,
-                 std::vector<std::pair<int, int>>& directed) {
-  for (const auto& block : blocks) {
-    if (block.body != body) continue;
-    for (const auto& c : block.conn) {
-      const int n = static_cast<int>(c.size());
-      for (int k = 0; k < n; ++k) {
-        const int a = c[k], b = c[(k + 1) % n];
-        ++uses[{std::min(a, b), std::max(a, b)}];
-        directed.emplace_back(a, b);
-      }
-    }
-  }
-}
-
-}  // namespace
-
 Surface make_surface(const Model& model, int body) {
-  std::map<std::pair<int, int>, int> uses;
-  std::vector<std::pair<int, int>> directed;
-  count_edges(model.q4_full, body, uses, directed);
-  count_edges(model.q4_hourglass, body, uses, directed);
-  count_edges(model.t3, body, uses, directed);
   Surface s;
   s.body = body;
-  // Cells are counter-clockwise (build_model checks positive areas), so an edge used by one
-  // cell, taken in that cell's order, has the body on its left.
-  for (const auto& [a, b] : directed)
-    if (uses.at({std::min(a, b), std::max(a, b)}) == 1) s.segments.push_back({a, b, -1, -1});
+  // Boundary edges run as their cell does (counter-clockwise, build_model checks positive
+  // areas), so each has the body on its left.
+  for (const BoundaryEdge& e : model.bodies[body].boundary_edges) s.segments.push_back({e.a, e.b, -1, -1});
   if (s.segments.empty()) throw std::logic_error("body " + model.bodies[body].name + " has no boundary segment");
   std::map<int, int> starting, ending;  // node -> segment starting / ending there
   for (int k = 0; k < static_cast<int>(s.segments.size()); ++k) {

@@ -65,7 +65,8 @@ struct Surface {
   double max_length = 0.0;  // longest reference segment [m]
 };
 
-// The boundary of `body` as oriented segments (throws std::logic_error for a body without any).
+// The boundary of `body` as oriented segments: its boundary edges (BodyInfo::boundary_edges), in
+// their order (throws std::logic_error for a body without any).
 Surface make_surface(const Model& model, int body);
 
 // Which nodes and coefficients a contact's relative motion is made of (1 node for a rigid

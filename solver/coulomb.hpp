@@ -35,11 +35,17 @@ inline ContactStatus classify(LocalPair r, double mu) {
   return std::abs(r.t) < mu * r.n * (1.0 - 1e-12) ? ContactStatus::stick : ContactStatus::slip;
 }
 
-// One bi-potential predictor-corrector update (paper Eq. (5)):
-//   r* = r - rho (x + mu |x_t| n),  r <- Proj_K(r*),  with x = x_free + w r.
-inline LocalPair bipotential_update(LocalPair r, LocalPair x_free, double w, double mu, double rho) {
-  const LocalPair x{x_free.n + w * r.n, x_free.t + w * r.t};
+// The bi-potential predictor-corrector of paper Eq. (5) at a given x:
+//   r* = r - rho (x + mu |x_t| n),  r <- Proj_K(r*).
+// Every bi-potential solve uses it: the semi-explicit scheme through bipotential_update, the
+// implicit scheme with x evaluated on its condensed problem.
+inline LocalPair bipotential_correct(LocalPair r, LocalPair x, double mu, double rho) {
   return project_coulomb({r.n - rho * (x.n + mu * std::abs(x.t)), r.t - rho * x.t}, mu);
+}
+
+// One bi-potential update of a local problem with isotropic compliance, x = x_free + w r.
+inline LocalPair bipotential_update(LocalPair r, LocalPair x_free, double w, double mu, double rho) {
+  return bipotential_correct(r, {x_free.n + w * r.n, x_free.t + w * r.t}, mu, rho);
 }
 
 struct LocalSolution {

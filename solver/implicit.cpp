@@ -4,13 +4,17 @@
 #include <cmath>
 #include <cstdio>
 
+#include "solver/run_monitor.hpp"
+
 namespace ricochet {
 
 ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
                                        const ImplicitSettings& settings)
     : model_(model), run_(run), set_(settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement);
-  contact_ = make_contact_state(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
+  contact_ = make_contact_set(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
+  x_free_.assign(contact_.candidates.size(), {});
+  weight_.assign(contact_.candidates.size(), 0.0);
   system_ = make_system_matrix(model);
   const int n = model.num_dofs();
   pcg_.resize(n);
@@ -73,8 +77,6 @@ bool ImplicitIntegrator::factorize() {
   return false;
 }
 
-ContactReport ImplicitIntegrator::contact_report() const { return report(contact_); }
-
 // Prescribed DOFs: identity rows and columns, so their velocity increment is zero.
 void ImplicitIntegrator::constrain_matrix() {
   double* values = system_.matrix.valuePtr();
@@ -129,29 +131,21 @@ bool ImplicitIntegrator::solve_contact() {
   const double dt = s_.dt, th = set_.theta;
   const bool position = run_.contact.level == ContactLevel::position;
   const double c = position ? dt * th : 1.0;  // x = x_free + c H y
-  ContactState& cs = contact_;
+  ContactSet& cs = contact_;
   cs.active.clear();
   auto u_pred = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) + dt * th * dv_free_.segment<2>(2 * j); };
   auto x_pred = [&](int j) -> Vec2 { return model_.ref.col(j) + u_pred(j); };
-  for (std::size_t q = 0; q < cs.surfaces.size(); ++q)
-    cs.boxes[q] = surface_box(cs.surfaces[q], x_pred, cs.surfaces[q].max_length);
+  update_boxes(cs, x_pred);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
-    const ContactCandidate& cc = cs.candidates[k];
-    Stencil& st = cs.stencil[k];
-    // Gap and frame at the predicted position (see closest() in contact.hpp); the reactions of
+    // Gap and frame at the predicted position (see closest() in obstacle.hpp); the reactions of
     // this iterate act along this frame. Between bodies the segment is chosen from the start of
     // the step (u0, v0).
     ObstacleContact oc;
-    if (cc.pair < 0) {
-      oc = step_frame(run_.obstacles[cc.obstacle], model_.ref.col(cc.node) + u0_.segment<2>(2 * cc.node), x_pred(cc.node));
-    } else {
-      NodeSegment ns;
-      if (!pair_contact_geometry(model_, cs, k, u0_, v0_, x_pred, ns)) {
-        cs.reaction[k] = {};
-        continue;
-      }
-      oc = {ns.gap, ns.normal};
+    if (!candidate_frame(model_, run_.obstacles, cs, k, u0_, v0_, x_pred, oc)) {
+      cs.reaction[k] = {};
+      continue;
     }
+    const Stencil& st = cs.stencil[k];
     const double gap = oc.gap;
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
     // engaged contact that separates simply gets R = 0 from the contact law.
@@ -171,23 +165,23 @@ bool ImplicitIntegrator::solve_contact() {
       const double a_jj = 0.5 / inv_diag_[2 * node] + 0.5 / inv_diag_[2 * node + 1];
       compliance += st.coef[j] * st.coef[j] / a_jj;
     }
-    cs.x_free[k] = position ? LocalPair{gap, t.dot(du)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
-    cs.weight[k] = c * dt * compliance;
+    x_free_[k] = position ? LocalPair{gap, t.dot(du)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    weight_[k] = c * dt * compliance;
     cs.active.push_back(k);
   }
   if (cs.active.empty()) {
     impulse_.setZero();
     y_.setZero();
-    cs.sweeps = 0;
+    contact_sweeps_ = 0;
     return true;
   }
-  cs.converged = direct_ ? false : uzawa_contact(c);
+  contact_converged_ = direct_ ? false : uzawa_contact(c);
   // As in the semi-explicit scheme, Gauss-Seidel that reaches contact.max_sweeps leaves its last
   // iterate: the step goes on and is counted in unconverged_steps. Only a failed linear solve
   // stops the run.
-  if (!cs.converged) {
+  if (!contact_converged_) {
     if (!exact_contact(c)) return false;
-    if (!cs.converged) step_unconverged_ = true;
+    if (!contact_converged_) step_unconverged_ = true;
   }
   return true;
 }
@@ -234,10 +228,10 @@ LocalPair ImplicitIntegrator::stencil_dot(int k, const Eigen::VectorXd& y) const
 // diagonal estimate of the local compliance; omega halves whenever the largest reaction
 // change grows. Fast when A is mass-dominated (W nearly diagonal).
 bool ImplicitIntegrator::uzawa_contact(double c) {
-  ContactState& cs = contact_;
+  ContactSet& cs = contact_;
   const double dt = s_.dt;
   double omega = 1.0, last_change = 1e300;
-  for (cs.sweeps = 1; cs.sweeps <= set_.uzawa_sweeps; ++cs.sweeps) {
+  for (contact_sweeps_ = 1; contact_sweeps_ <= set_.uzawa_sweeps; ++contact_sweeps_) {
     build_impulse();
     rhs_ = dt * impulse_;
     if (!solve(rhs_, y_)) return false;
@@ -245,11 +239,10 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
     for (int k : cs.active) {
       const ContactCandidate& cc = cs.candidates[k];
       const LocalPair hy = stencil_dot(k, y_);
-      const LocalPair x{cs.x_free[k].n + c * hy.n, cs.x_free[k].t + c * hy.t};
-      const double rho = omega / cs.weight[k];
+      const LocalPair x{x_free_[k].n + c * hy.n, x_free_[k].t + c * hy.t};
+      const double rho = omega / weight_[k];
       LocalPair& r = cs.reaction[k];
-      const LocalPair next = project_coulomb(
-          {r.n - rho * (x.n + cc.friction_coeff * std::abs(x.t)), r.t - rho * x.t}, cc.friction_coeff);
+      const LocalPair next = bipotential_correct(r, x, cc.friction_coeff, rho);
       change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
       size = std::max(size, std::hypot(next.n, next.t));
       r = next;
@@ -269,14 +262,14 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
 // active contact direction, then Gauss-Seidel over the contacts with each contact's local
 // problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
 // combination of the same columns. Returns false only when a linear solve fails; whether
-// Gauss-Seidel converged within contact.max_sweeps is cs.converged.
+// Gauss-Seidel converged within contact.max_sweeps is contact_converged_.
 bool ImplicitIntegrator::exact_contact(double c) {
-  ContactState& cs = contact_;
+  ContactSet& cs = contact_;
   const double dt = s_.dt;
   const int dirs = cs.any_friction ? 2 : 1;
   const int m = dirs * static_cast<int>(cs.active.size());
   ++exact_contact_solves_;
-  cs.converged = false;
+  contact_converged_ = false;
   auto direction = [&](int a) -> Vec2 {
     const Vec2 n = cs.normal[cs.active[a / dirs]];
     return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
@@ -299,14 +292,14 @@ bool ImplicitIntegrator::exact_contact(double c) {
   }
 
   const double tol = run_.contact.tolerance;
-  for (cs.sweeps = 1; cs.sweeps <= run_.contact.max_sweeps; ++cs.sweeps) {
+  for (contact_sweeps_ = 1; contact_sweeps_ <= run_.contact.max_sweeps; ++contact_sweeps_) {
     double change = 0.0, size = 0.0;
     for (int i = 0; i < static_cast<int>(cs.active.size()); ++i) {
       const int k = cs.active[i];
       const double mu = cs.candidates[k].friction_coeff;
       LocalPair& r = cs.reaction[k];
       // x = x_base + W_kk r, x_base = x_free + sum over the other contacts.
-      LocalPair base = cs.x_free[k];
+      LocalPair base = x_free_[k];
       for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
         if (j == i) continue;
         const LocalPair rj = cs.reaction[cs.active[j]];
@@ -323,7 +316,7 @@ bool ImplicitIntegrator::exact_contact(double c) {
         next = r;
         for (int it = 0; it < 200; ++it) {
           const LocalPair x{base.n + wnn * next.n + wnt * next.t, base.t + wtn * next.n + wtt * next.t};
-          const LocalPair upd = project_coulomb({next.n - rho * (x.n + mu * std::abs(x.t)), next.t - rho * x.t}, mu);
+          const LocalPair upd = bipotential_correct(next, x, mu, rho);
           const double d = std::hypot(upd.n - next.n, upd.t - next.t);
           next = upd;
           if (d <= 1e-3 * tol * std::hypot(upd.n, upd.t) || d == 0.0) break;
@@ -334,11 +327,11 @@ bool ImplicitIntegrator::exact_contact(double c) {
       r = next;
     }
     if (change <= tol * size || change == 0.0) {
-      cs.converged = true;
+      contact_converged_ = true;
       break;
     }
   }
-  cs.sweeps = std::min(cs.sweeps, run_.contact.max_sweeps);
+  contact_sweeps_ = std::min(contact_sweeps_, run_.contact.max_sweeps);
   for (int a = 0; a < m; ++a) {
     const LocalPair r = cs.reaction[cs.active[a / dirs]];
     r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
@@ -408,7 +401,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
     if (!solve(rhs_, dv_free_)) return false;
     if (!contact_.candidates.empty()) {
       if (!solve_contact()) return false;
-      sweeps = std::max(sweeps, contact_.sweeps);
+      sweeps = std::max(sweeps, contact_sweeps_);
     } else {
       y_.setZero();
     }
@@ -431,42 +424,22 @@ bool ImplicitIntegrator::step(bool with_energy) {
   for (const auto& p : run_.prescribed)
     s_.reaction_work += prescribed_v_[p.dof] / dt * (u1_[p.dof] - u0_[p.dof]);
   s_.hourglass_dissipation += dt * (xi * s_.forces.hourglass_power + (1.0 - xi) * hourglass_power0);
-  ContactState& cs = contact_;
-  cs.active_count = cs.stick_count = cs.slip_count = 0;
-  cs.normal_force = cs.tangential_force = 0.0;
-  for (std::size_t k = 0; k < cs.candidates.size(); ++k) {
+  // The step's contact results, from the converged reactions: the contacts with r_n > 0, their
+  // statuses and forces, and their work and slip work on the step's displacement.
+  ContactSet& cs = contact_;
+  begin_step(cs);
+  for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
     const LocalPair r = cs.reaction[k];
     if (!(r.n > 0.0)) {
-      cs.status[k] = ContactStatus::open;
+      record(cs, k, ContactStatus::open);
       continue;
     }
-    const ContactCandidate& cc = cs.candidates[k];
-    const Vec2 n = cs.normal[k], t{n.y(), -n.x()};
-    const Stencil& st = cs.stencil[k];
-    Vec2 du = Vec2::Zero();  // relative displacement of the stencil
-    double work = 0.0;
-    for (int j = 0; j < st.count; ++j) {
-      const Vec2 du_j = u1_.segment<2>(2 * st.node[j]) - u0_.segment<2>(2 * st.node[j]);
-      du += st.coef[j] * du_j;
-      work += (st.coef[j] * (r.n * n + r.t * t)).dot(du_j);
-    }
-    cs.contact_work += work;
-    cs.contact_work_normal += r.n * n.dot(du);
-    cs.friction_dissipation -= r.t * t.dot(du);
-    cs.status[k] = classify(r, cc.friction_coeff);
-    ++cs.active_count;
-    cs.stick_count += cs.status[k] == ContactStatus::stick;
-    cs.slip_count += cs.status[k] == ContactStatus::slip;
-    cs.normal_force += r.n;
-    cs.tangential_force += r.t;
+    cs.active.push_back(k);
+    record(cs, k, classify(r, cs.candidates[k].friction_coeff));
   }
-  cs.sweeps = sweeps;
-  if (step_unconverged_) ++cs.unconverged_steps;
-  if (cs.active_count > 0) {
-    ++cs.steps_with_contact;
-    cs.sweeps_total += sweeps;
-    cs.sweeps_max = std::max(cs.sweeps_max, sweeps);
-  }
+  auto du = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) - u0_.segment<2>(2 * j); };
+  for (int k : cs.active) record_work(cs, k, 1.0, du, true, du);
+  finish_step(cs, sweeps, !step_unconverged_);
   v_prev_ = v0_;
   s_.u = u1_;
   s_.v_half = v1_;
@@ -483,8 +456,7 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   const State& s = integrator.state();
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
   const bool with_contact = !integrator.contact().candidates.empty();
-  RunMonitor monitor(model, settings, result, with_contact ? &integrator.contact().candidates : nullptr,
-                     &integrator.contact().surfaces);
+  RunMonitor monitor(model, settings, result, integrator.contact());
   const long planned = monitor.planned_steps();
   for (;;) {
     const long n = s.step;
@@ -492,7 +464,7 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
     // stresses come from a stress pass of their own.
     if (const StressTracking* st = monitor.stress_tracking(n)) monitor.track_stress(s, stress_peaks(model, s.u.data(), *st));
     if (monitor.is_monitor_step(n)) {
-      if (!monitor.observe(s, integrator.contact_report(), kinetic0)) break;
+      if (!monitor.observe(s, kinetic0)) break;
       if (progress) progress(n, planned, s.time);
     }
     if (n == planned) break;
@@ -500,18 +472,13 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
       monitor.diverge(s, integrator.failure());
       break;
     }
-    if (with_contact) {
-      const ContactState& c = integrator.contact();
-      // The step just taken: its reactions acted over [t_n, t_n+1].
-      monitor.contact_step(s.time - s.dt, s.dt, c.active_count, c.normal_force, c.tangential_force);
-    }
+    if (with_contact) monitor.contact_step(s.time - s.dt, s.dt);  // the step just taken: [t_n, t_n+1]
     if (!(s.forces.min_jacobian > 0.0)) {
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
       break;
     }
   }
   monitor.finish(s);
-  copy_contact_totals(integrator.contact(), result);
   result.newton_iterations = integrator.newton_iterations_total();
   result.linear_iterations = integrator.linear_iterations_total();
   result.direct_solver = integrator.direct_solver();

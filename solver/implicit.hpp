@@ -13,8 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "solver/contact_set.hpp"
 #include "solver/pcg.hpp"
-#include "solver/run_monitor.hpp"
+#include "solver/run_types.hpp"
 #include "solver/sparse_ldlt.hpp"
 #include "solver/tangent.hpp"
 
@@ -51,8 +52,7 @@ class ImplicitIntegrator {
   // The state at t_n for the observers: u = u_n, v_half = v_n and a = 0 (so velocity_at_step
   // gives v_n), f_int = f_int(u_n, v_n), forces = its totals.
   const State& state() const { return s_; }
-  const ContactState& contact() const { return contact_; }
-  ContactReport contact_report() const;
+  const ContactSet& contact() const { return contact_; }
   const std::vector<double>& residuals() const { return residuals_; }  // relative, last step
   const std::string& failure() const { return failure_; }
   long newton_iterations_total() const { return newton_total_; }
@@ -79,7 +79,13 @@ class ImplicitIntegrator {
   const RunSettings& run_;
   ImplicitSettings set_;
   State s_;
-  ContactState contact_;
+  ContactSet contact_;
+  // Per candidate, the local problem x = x_free + w r of the current Newton iterate (w: the
+  // diagonal estimate of the local compliance).
+  std::vector<LocalPair> x_free_;
+  std::vector<double> weight_;
+  int contact_sweeps_ = 0;           // sweeps of the last contact solve
+  bool contact_converged_ = true;    // the last contact solve met its tolerance
   SystemMatrix system_;
   Pcg pcg_;
   bool direct_ = false;

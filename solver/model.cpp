@@ -55,29 +55,6 @@ double t3_characteristic_length(const Eigen::Matrix<double, 2, 3>& x) {
   return std::sqrt(2.0 / 3.0) * 2.0 * area / std::sqrt(s_max);
 }
 
-std::vector<int> boundary_nodes(const Mesh& mesh) {
-  std::vector<std::pair<int, int>> edges;
-  auto add = [&edges](int a, int b) { edges.emplace_back(std::min(a, b), std::max(a, b)); };
-  for (const auto& q : mesh.quads)
-    for (int k = 0; k < 4; ++k) add(q[k], q[(k + 1) % 4]);
-  for (const auto& t : mesh.tris)
-    for (int k = 0; k < 3; ++k) add(t[k], t[(k + 1) % 3]);
-  std::sort(edges.begin(), edges.end());
-  std::vector<int> nodes;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) {
-      nodes.push_back(edges[i].first);
-      nodes.push_back(edges[i].second);
-    }
-    i = j;
-  }
-  std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-  return nodes;
-}
-
 Model build_model(const std::vector<BodyInput>& inputs, PlaneMode plane, const Vec2& gravity) {
   Model model;
   model.plane = plane;
@@ -101,10 +78,19 @@ Model build_model(const std::vector<BodyInput>& inputs, PlaneMode plane, const V
     const double t = in.thickness;
     if (!(t > 0.0)) throw std::invalid_argument("body '" + in.name + "': thickness must be > 0");
     if (!(rho > 0.0)) throw std::invalid_argument("body '" + in.name + "': density must be > 0");
-    std::vector<int> boundary = boundary_nodes(m);
-    for (int& i : boundary) i += node0;
+    std::vector<BoundaryEdge> edges = boundary_edges(m);
+    std::vector<int> boundary;
+    for (BoundaryEdge& e : edges) {
+      e.a += node0;
+      e.b += node0;
+      e.cell += cell0;
+      boundary.push_back(e.a);
+      boundary.push_back(e.b);
+    }
+    std::sort(boundary.begin(), boundary.end());
+    boundary.erase(std::unique(boundary.begin(), boundary.end()), boundary.end());
     model.bodies.push_back({in.name, node0, m.num_nodes(), cell0, m.num_cells(), t,
-                            in.quad_element, in.material, std::move(boundary)});
+                            in.quad_element, in.material, std::move(boundary), std::move(edges)});
     model.ref.middleCols(node0, m.num_nodes()) = m.nodes;
     for (int i = 0; i < m.num_nodes(); ++i)
       model.initial_velocity.segment<2>(2 * (node0 + i)) = in.initial_velocity;

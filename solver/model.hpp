@@ -76,6 +76,7 @@ struct BodyInfo {
   QuadElement quad_element = QuadElement::full_2x2;
   Material material;
   std::vector<int> boundary_nodes;  // global indices of nodes on an edge used by one cell, sorted
+  std::vector<BoundaryEdge> boundary_edges;  // boundary_edges() of the body's mesh, global indices
 };
 
 struct Model {
@@ -108,9 +109,6 @@ Model build_model(const std::vector<BodyInput>& bodies, PlaneMode plane, const V
 // L_e = sqrt(2/3) 2 A / sqrt(eig_max(sum over edges e e^T)) (a/sqrt(3) for an equilateral
 // triangle of side a; the smallest altitude, 2 A / longest edge, overestimates the stable
 // step by up to 27 %). [m]
-// Nodes on the mesh boundary: the ends of edges that belong to exactly one cell. Sorted.
-std::vector<int> boundary_nodes(const Mesh& mesh);
-
 double q4_characteristic_length(const Eigen::Matrix<double, 2, 4>& x);
 double t3_characteristic_length(const Eigen::Matrix<double, 2, 3>& x);
 

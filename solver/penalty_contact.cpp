@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <stdexcept>
-#include <tuple>
 #include <type_traits>
 
 namespace ricochet {
@@ -25,59 +23,21 @@ double penalty_bulk_modulus(const Material& material) {
 
 namespace {
 
-// A cell edge (a < b) and the reference area of the cell using it.
-struct Edge {
-  int a, b;
-  double cell_area;
-};
-
-template <class Block>
-void collect_edges(const Model& model, const std::vector<Block>& blocks, int body,
-                   std::vector<Edge>& edges) {
-  for (const auto& block : blocks) {
-    if (block.body != body) continue;
-    for (const auto& c : block.conn) {
-      const int n = static_cast<int>(c.size());
-      double twice_area = 0.0;
-      for (int k = 0; k < n; ++k) {
-        const Vec2 p = model.ref.col(c[k]), q = model.ref.col(c[(k + 1) % n]);
-        twice_area += p.x() * q.y() - q.x() * p.y();
-      }
-      for (int k = 0; k < n; ++k) {
-        const int a = c[k], b = c[(k + 1) % n];
-        edges.push_back({std::min(a, b), std::max(a, b), 0.5 * twice_area});
-      }
-    }
-  }
+// k_s / f_si = K l^2 e / A_c of one boundary segment (its length l, its cell's area A_c).
+double segment_stiffness_per_scale(const Model& model, const BodyInfo& body, const BoundaryEdge& e, double bulk) {
+  const double l2 = (model.ref.col(e.b) - model.ref.col(e.a)).squaredNorm();
+  return bulk * l2 * body.thickness / e.cell_area;
 }
 
-// Per node of the model: k_i / f_si = sum over its boundary segments of K l^2 e / (2 A_c).
-// With `segments`, also every boundary segment's k_s / f_si, keyed by its (min, max) node pair.
-std::vector<double> nodal_stiffness_per_scale(const Model& model,
-                                              std::map<std::pair<int, int>, double>* segments = nullptr) {
+// Per node of the model: k_i / f_si = sum over its boundary segments of k_s / (2 f_si).
+std::vector<double> nodal_stiffness_per_scale(const Model& model) {
   std::vector<double> k(model.num_nodes(), 0.0);
-  std::vector<Edge> edges;
-  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    const BodyInfo& body = model.bodies[b];
+  for (const BodyInfo& body : model.bodies) {
     const double bulk = penalty_bulk_modulus(body.material);
-    edges.clear();
-    collect_edges(model, model.q4_full, b, edges);
-    collect_edges(model, model.q4_hourglass, b, edges);
-    collect_edges(model, model.t3, b, edges);
-    std::sort(edges.begin(), edges.end(),
-              [](const Edge& x, const Edge& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i;
-      while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
-      if (j - i == 1) {
-        const Edge& e = edges[i];
-        const double l2 = (model.ref.col(e.b) - model.ref.col(e.a)).squaredNorm();
-        const double ks = bulk * l2 * body.thickness / e.cell_area;
-        k[e.a] += 0.5 * ks;
-        k[e.b] += 0.5 * ks;
-        if (segments) (*segments)[{e.a, e.b}] = ks;
-      }
-      i = j;
+    for (const BoundaryEdge& e : body.boundary_edges) {
+      const double ks = segment_stiffness_per_scale(model, body, e, bulk);
+      k[e.a] += 0.5 * ks;
+      k[e.b] += 0.5 * ks;
     }
   }
   return k;
@@ -85,46 +45,42 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model,
 
 }  // namespace
 
-PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
-                                const std::vector<std::vector<double>>& friction,
-                                const std::vector<PrescribedDof>& prescribed,
-                                const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
+PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+                                    const std::vector<std::vector<double>>& friction,
+                                    const std::vector<PrescribedDof>& prescribed,
+                                    const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
   if (!(settings.scale_factor > 0.0))
     throw std::invalid_argument("penalty contact: scale factor f_si must be > 0");
-  // The candidates, exactly as the bi-potential phase chooses them.
-  ContactState c = make_contact_state(model, obstacles, friction, prescribed, pairs);
-  PenaltyState p;
-  p.candidates = c.candidates;
-  p.any_friction = c.any_friction;
+  PenaltyContact p;
+  p.set = make_contact_set(model, obstacles, friction, prescribed, pairs);
+  const ContactSet& c = p.set;
   p.scale_factor = settings.scale_factor;
-  p.surfaces = std::move(c.surfaces);
-  p.boxes = std::move(c.boxes);
-  p.stencil = std::move(c.stencil);
-  p.segment = std::move(c.segment);
-  std::map<std::pair<int, int>, double> k_edge;
-  const std::vector<double> k_node = nodal_stiffness_per_scale(model, &k_edge);
-  // Per pair and master segment, k_s; per pair the smallest master boundary node mass.
-  p.segment_stiffness.resize(p.surfaces.size());
-  std::vector<double> m_master(p.surfaces.size()), k_max(p.surfaces.size(), 0.0);
-  for (std::size_t q = 0; q < p.surfaces.size(); ++q) {
-    for (const SurfaceSegment& sg : p.surfaces[q].segments) {
-      const double ks = k_edge.at({std::min(sg.a, sg.b), std::max(sg.a, sg.b)});
+  const std::vector<double> k_node = nodal_stiffness_per_scale(model);
+  // Per pair and master segment (the master's boundary edges, in order), f_si k_s; per pair the
+  // smallest master boundary node mass.
+  p.segment_stiffness.resize(c.surfaces.size());
+  std::vector<double> m_master(c.surfaces.size()), k_max(c.surfaces.size(), 0.0);
+  for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
+    const BodyInfo& master = model.bodies[c.surfaces[q].body];
+    const double bulk = penalty_bulk_modulus(master.material);
+    for (const BoundaryEdge& e : master.boundary_edges) {
+      const double ks = segment_stiffness_per_scale(model, master, e, bulk);
       p.segment_stiffness[q].push_back(settings.scale_factor * ks);
       k_max[q] = std::max(k_max[q], ks);
     }
     m_master[q] = std::numeric_limits<double>::infinity();
-    for (int j : p.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
+    for (int j : c.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
   }
   if (settings.soft_scale > 0.0) {
     if (!(settings.soft_dt > 0.0)) throw std::logic_error("penalty contact: soft_scale > 0 needs soft_dt > 0");
     p.soft_factor = settings.soft_scale / (2.0 * settings.soft_dt * settings.soft_dt);
   }
-  const std::size_t n = p.candidates.size();
+  const std::size_t n = c.candidates.size();
   p.stiffness.resize(n);
   p.bulk_stiffness.resize(n);
   p.pair_compliance.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    const ContactCandidate& cc = p.candidates[i];
+    const ContactCandidate& cc = c.candidates[i];
     double k = k_node[cc.node];
     double m_star = model.mass[2 * cc.node];
     if (cc.pair >= 0) {
@@ -137,74 +93,59 @@ PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>&
     if (!(p.bulk_stiffness[i] > 0.0))
       throw std::logic_error("penalty contact: boundary node " + std::to_string(cc.node) + " has no boundary segment");
   }
-  p.force_n.assign(n, 0.0);
-  p.force_t.assign(n, 0.0);
   p.last_position.assign(n, Vec2::Zero());
-  p.normal.assign(n, Vec2::UnitY());
-  p.status.assign(n, ContactStatus::open);
-  p.active.reserve(n);
   return p;
 }
 
-double penalty_critical_dt(const Model& model, const PenaltyState& p) {
+double penalty_critical_dt(const Model& model, const PenaltyContact& p) {
+  const std::vector<ContactCandidate>& cand = p.set.candidates;
   double dt = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < p.candidates.size(); ++i)
-    dt = std::min(dt, p.candidates[i].pair < 0
-                          ? 2.0 * std::sqrt(model.mass[2 * p.candidates[i].node] / p.stiffness[i])
-                          : 2.0 / std::sqrt(p.stiffness[i] * p.pair_compliance[i]));
+  for (std::size_t i = 0; i < cand.size(); ++i)
+    dt = std::min(dt, cand[i].pair < 0 ? 2.0 * std::sqrt(model.mass[2 * cand[i].node] / p.stiffness[i])
+                                       : 2.0 / std::sqrt(p.stiffness[i] * p.pair_compliance[i]));
   return dt;
 }
 
-double penalty_combined_critical_dt(const Model& model, const PenaltyState& p) {
+double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p) {
   const double de = model.critical_dt, dp = penalty_critical_dt(model, p);
   if (!std::isfinite(dp)) return de;
   return 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp));
 }
 
-double penalty_stable_time_step(const Model& model, const PenaltyState& p, double safety) {
+double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety) {
   return safety * penalty_combined_critical_dt(model, p);
 }
 
-void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   PenaltyState& p, State& s) {
-  const int count = static_cast<int>(p.candidates.size());
-  p.active.clear();
-  p.active_count = p.stick_count = p.slip_count = 0;
-  p.normal_force = p.tangential_force = 0.0;
+void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, PenaltyContact& p, State& s) {
+  ContactSet& c = p.set;
+  const int count = static_cast<int>(c.candidates.size());
+  begin_step(c);
   p.normal_energy = p.tangential_energy = 0.0;
   double depth = 0.0;
   const bool first = !p.initialized;
   p.initialized = true;
 
   auto position = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j); };
-  for (std::size_t q = 0; q < p.surfaces.size(); ++q)
-    p.boxes[q] = surface_box(p.surfaces[q], position, p.surfaces[q].max_length);
+  update_boxes(c, position);
 
   for (int k = 0; k < count; ++k) {
-    const ContactCandidate& cc = p.candidates[k];
-    const int i = cc.node;
-    const Vec2 x = position(i);
-    Stencil& st = p.stencil[k];
+    const ContactCandidate& cc = c.candidates[k];
+    const Vec2 x = position(cc.node);
+    Stencil& st = c.stencil[k];
+    // The frame at u_n (start and evaluation positions coincide).
     ObstacleContact oc;
-    if (cc.pair < 0) {
-      oc = closest(obstacles[cc.obstacle], x);
-    } else {
-      NodeSegment ns;
-      if (pair_contact_geometry(model, p, k, s.u, s.v_half, position, ns)) {  // at t_n: start = evaluation
-        oc = {ns.gap, ns.normal};
-      } else {
-        oc.gap = std::numeric_limits<double>::infinity();  // facing no segment: open
-        st.count = 1;
-      }
+    if (!candidate_frame(model, obstacles, c, k, s.u, s.v_half, position, oc)) {
+      oc.gap = std::numeric_limits<double>::infinity();  // facing no segment: open
+      st.count = 1;
     }
     const double g = oc.gap;
     const Vec2 t = oc.tangent();
-    p.normal[k] = oc.normal;
+    c.normal[k] = oc.normal;
     // Between bodies: f_si min(k_slave, k_s) of the segment met this step, at least the soft
     // constraint's k1 of the stencil's lightest node.
     double stiff = p.stiffness[k];
-    if (cc.pair >= 0 && p.segment[k] >= 0) {
-      stiff = std::min(p.bulk_stiffness[k], p.segment_stiffness[cc.pair][p.segment[k]]);
+    if (cc.pair >= 0 && c.segment[k] >= 0) {
+      stiff = std::min(p.bulk_stiffness[k], p.segment_stiffness[cc.pair][c.segment[k]]);
       if (p.soft_factor > 0.0) {
         double m_star = model.mass[2 * st.node[0]];
         for (int j = 1; j < st.count; ++j) m_star = std::min(m_star, model.mass[2 * st.node[j]]);
@@ -229,7 +170,7 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
         ds = s.dt * t.dot(dv);
       }
       p.last_position[k] = x;
-      const double old = p.force_t[k];
+      const double old = c.reaction[k].t;
       const double trial = old - stiff * ds;
       const double cap = cc.friction_coeff * fn;
       if (std::abs(trial) <= cap) {
@@ -237,49 +178,29 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
         if (fn > 0.0) status = ContactStatus::stick;
       } else {
         ft = std::copysign(cap, trial);
-        p.friction_dissipation += (trial - ft) * (old + ft) / (2.0 * stiff);
+        c.total.friction_dissipation += (trial - ft) * (old + ft) / (2.0 * stiff);
       }
-      p.force_t[k] = ft;
     }
-    p.force_n[k] = fn;
-    p.status[k] = status;
+    c.reaction[k] = {fn, ft};
+    record(c, k, status);
     if (!(fn > 0.0)) continue;
 
     depth = std::max(depth, -g);
-    p.active.push_back(k);
+    c.active.push_back(k);
     const Vec2 force = fn * oc.normal + ft * t;
     for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force * model.inv_mass[2 * st.node[j]];
-    p.normal_force += fn;
-    p.tangential_force += ft;
     p.normal_energy += 0.5 * stiff * g * g;
     p.tangential_energy += ft * ft / (2.0 * stiff);
-    p.stick_count += status == ContactStatus::stick;
-    p.slip_count += status == ContactStatus::slip;
   }
-  p.active_count = static_cast<int>(p.active.size());
-  p.stored_energy = p.normal_energy + p.tangential_energy;
+  c.last.stored_energy = p.normal_energy + p.tangential_energy;
   p.penetration = depth;
-  p.penetration_max = std::max(p.penetration_max, depth);
-  if (p.active.empty()) return;
-  ++p.steps_with_contact;
-
   // Work of the penalty forces, dt F . v_n with v_n = v_{n-1/2} + dt/2 a_n and the final a_n:
-  // the change of the half-step kinetic energy that F causes (as contact_phase records it).
+  // the change of the half-step kinetic energy that F causes (as contact_phase records it). The
+  // friction dissipation is the return map's, above.
   const double dt = s.dt;
-  for (int k : p.active) {
-    const Stencil& st = p.stencil[k];
-    const Vec2 n = p.normal[k], t{n.y(), -n.x()};
-    const Vec2 force = p.force_n[k] * n + p.force_t[k] * t;
-    double work = 0.0, work_normal = 0.0;
-    for (int j = 0; j < st.count; ++j) {
-      const int node = st.node[j];
-      const Vec2 v_mid = s.v_half.segment<2>(2 * node) + 0.5 * dt * s.a.segment<2>(2 * node);
-      work += (st.coef[j] * force).dot(v_mid);
-      work_normal += st.coef[j] * p.force_n[k] * n.dot(v_mid);
-    }
-    p.contact_work += dt * work;
-    p.contact_work_normal += dt * work_normal;
-  }
+  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
+  for (int k : c.active) record_work(c, k, dt, v_mid, false, v_mid);
+  finish_step(c, 0, true);
 }
 
 }  // namespace ricochet

@@ -1,6 +1,7 @@
-// Explicit penalty contact of body nodes with rigid obstacles, LS-DYNA style (the paper's
-// comparison scheme; docs/background.md, Penalty contact). It plugs in where the bi-potential
-// contact_phase() does: after evaluate() gives the free accelerations at t_n, penalty_phase() adds
+// The explicit penalty scheme's contact solve, LS-DYNA style (the paper's comparison scheme;
+// docs/background.md, Penalty contact). The candidates, frames and observables are the shared
+// contact module's (contact_set.hpp); this file holds the springs only. It plugs in where the
+// bi-potential contact_phase() does: after evaluate() gives the free accelerations at t_n, penalty_phase() adds
 // the forces of springs acting on the candidate nodes that lie behind an obstacle at u_n, and
 // update() integrates them like any other force. No contact condition is enforced: the penalty lets
 // a node penetrate until its spring balances the impact.
@@ -52,91 +53,58 @@
 
 #include <vector>
 
-#include "solver/contact.hpp"
+#include "solver/contact_set.hpp"
 
 namespace ricochet {
 
-struct PenaltySettings {
-  double scale_factor = 0.1;  // f_si (LS-DYNA SLSFAC default) [-]
-  // LS-DYNA's SOFT = 1 (soft constraint): with soft_scale > 0 every spring is at least
-  //   k1 = soft_scale m* / (2 soft_dt^2),
-  // m* the smallest nodal mass of the contact (the slave node; between bodies also the master
-  // segment's nodes), soft_dt the step the run starts with. k = max(f_si k_bulk, k1): for a
-  // soft body against a stiff one, whose bulk-modulus springs are too soft to stop it. k1 keeps
-  // every spring's own step limit 2 sqrt(m*/(2 k1)) >= 2 soft_dt / sqrt(soft_scale).
-  double soft_scale = 0.0;  // SOFSCL; 0 = SOFT = 0 (bulk-modulus springs only) [-]
-  double soft_dt = 0.0;     // [s], > 0 when soft_scale > 0
-};
-
-// Preallocated working set, per-step results and run totals of the penalty phase.
-struct PenaltyState {
-  std::vector<ContactCandidate> candidates;  // boundary node x obstacle, less prescribed nodes
+// The contact set and the springs: per candidate its stiffness and the tangential spring's
+// state (the spring force f_t is set.reaction[k].t, the normal force f_n set.reaction[k].n).
+struct PenaltyContact {
+  ContactSet set;
   std::vector<double> stiffness;             // per candidate, k [N/m] (between bodies: the largest, for the step)
   std::vector<double> bulk_stiffness;        // per candidate, f_si min(k_i, largest k_s) between bodies [N/m]
   double soft_factor = 0.0;                  // soft_scale / (2 soft_dt^2): k1 = soft_factor m* [1/s^2]
-  std::vector<double> force_n;               // per candidate, f_n of the last step (>= 0) [N]
-  std::vector<double> force_t;               // per candidate, tangential spring force f_t along t [N]
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> last_position;  // per candidate, x at the last step [m]
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;  // per candidate, n of closest() at u_n (this step's frame)
-  std::vector<ContactStatus> status;         // per candidate, of the last step
-  std::vector<int> active;                   // candidate indices active in the last step
-  // Contact between bodies (as in ContactState): master surfaces and boxes per pair; per
-  // candidate the stencil and tracked segment; `compliance` = 1/m_slave + 1/m_master,min for a
-  // pair candidate (the spring between the slave node and the lightest master node).
-  std::vector<Surface> surfaces;
-  std::vector<Box2> boxes;
-  std::vector<Stencil> stencil;
-  std::vector<int> segment;
+  // Between bodies: `pair_compliance` = 1/m_slave + 1/m_master,min for a pair candidate (the
+  // spring between the slave node and the lightest master node).
   std::vector<double> pair_compliance;       // per candidate, 0 for rigid obstacles [1/kg]
   std::vector<std::vector<double>> segment_stiffness;  // per pair and master segment, f_si k_s [N/m]
   double scale_factor = 0.1;                 // f_si used for `stiffness` [-]
-  bool any_friction = false;
   bool initialized = false;                  // last_position holds the previous step's positions
 
-  // Results of the last step (at t_n).
-  int active_count = 0, stick_count = 0, slip_count = 0;
-  double normal_force = 0.0;      // sum f_n [N]
-  double tangential_force = 0.0;  // sum f_t along each obstacle's tangent [N]
-  double penetration = 0.0;       // largest depth -g of any candidate (>= 0) [m]
+  // Of the last step (at t_n); their sum is set.last.stored_energy.
   double normal_energy = 0.0;     // sum 1/2 k g^2 over active candidates [J]
   double tangential_energy = 0.0; // sum f_t^2 / (2 k) [J]
-  double stored_energy = 0.0;     // normal_energy + tangential_energy: the penalty energy [J]
-  // Accumulated over the run.
-  double friction_dissipation = 0.0;  // sum of D (see above) [J]
-  double contact_work = 0.0;          // sum dt F . v_n of the penalty forces on the bodies [J]
-  double contact_work_normal = 0.0;   // its part done by the normal forces f_n n [J]
-  double penetration_max = 0.0;       // largest `penetration` seen [m]
-  long steps_with_contact = 0;
+  double penetration = 0.0;       // largest depth -g of any candidate (>= 0) [m]
 };
 
 // Bulk modulus used by the penalty stiffness: the 3D K = lambda + 2 mu / 3 [Pa] (see above).
 double penalty_bulk_modulus(const Material& material);
 
-// Candidates as make_contact_state() builds them (each body's boundary nodes with each
-// obstacle, less nodes with a prescribed DOF; friction[b][o] = mu of body b against obstacle
-// o), with their stiffness k_i from `settings`, and every working array allocated.
+// The contact set (make_contact_set) with each candidate's stiffness k_i from `settings`, and
+// every working array allocated.
 // Body pairs (body_contact.hpp): the slave node's spring is k = f_si min(k_i, k_s), k_i the
 // slave node's stiffness and k_s that of the master segment it meets this step (LS-DYNA's
 // default PENO = 1: the minimum of the slave node's and the master segment's stiffness); the
 // force -k g n acts on the slave node and, with weights -(1 - xi) and -xi, on the segment's
 // nodes. `stiffness` holds f_si min(k_i, largest k_s of the master), which sets the step.
-PenaltyState make_penalty_state(const Model& model, const std::vector<Obstacle>& obstacles,
-                                const std::vector<std::vector<double>>& friction,
-                                const std::vector<PrescribedDof>& prescribed,
-                                const PenaltySettings& settings,
-                                const std::vector<BodyPair>& pairs = {});
+PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+                                    const std::vector<std::vector<double>>& friction,
+                                    const std::vector<PrescribedDof>& prescribed,
+                                    const PenaltySettings& settings,
+                                    const std::vector<BodyPair>& pairs = {});
 
 // Largest stable step of the contact springs alone: min over candidates of 2 sqrt(m_i / k_i)
 // (a node mass on a spring to the ground; between bodies 2 / sqrt(k (1/m_s + 1/m_master,min)),
 // two masses on a spring), +infinity without candidates [s].
-double penalty_critical_dt(const Model& model, const PenaltyState& p);
+double penalty_critical_dt(const Model& model, const PenaltyContact& p);
 
 // Critical step of the elements and the springs together [s]:
 //   dt_c = 1 / sqrt(1 / dt_e^2 + 1 / dt_p^2),  dt_e = model.critical_dt, dt_p = penalty_critical_dt.
 // The springs only add stiffness, so omega_max^2 <= omega_e^2 + omega_p^2 (Weyl), and with
 // dt_e and dt_p both bounds dt_c is one too. min(dt_e, dt_p) is not: near dt_e = dt_p the
 // coupled system is up to sqrt(2) faster (see tests/test_penalty_contact.cpp, PenaltyTimeStep).
-double penalty_combined_critical_dt(const Model& model, const PenaltyState& p);
+double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p);
 
 // safety * penalty_combined_critical_dt: the fixed step of a penalty run [s]. Stable is not
 // accurate: when the springs set the step (f_si >~ 3 on square cells), an impact at 0.9 x the
@@ -144,12 +112,11 @@ double penalty_combined_critical_dt(const Model& model, const PenaltyState& p);
 // their one-sided springs; 0.3-0.7 x brings it to ~1 % (measured, test_penalty_contact.cpp).
 // With the LS-DYNA default f_si = 0.1 the elements set the step and the springs have
 // omega dt ~ 0.35.
-double penalty_stable_time_step(const Model& model, const PenaltyState& p, double safety);
+double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety);
 
-// After evaluate(): the penalty forces of the state at t_n, added to s.a; per-step results and
-// energies updated. Allocates nothing.
+// After evaluate(): the penalty forces of the state at t_n, added to s.a; the step's results and
+// energies recorded in p.set. Allocates nothing.
 void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   PenaltyState& p, State& s);
-
+                   PenaltyContact& p, State& s);
 
 }  // namespace ricochet

@@ -9,38 +9,6 @@
 namespace ricochet {
 
 namespace {
-const std::vector<Surface> kNoSurfaces;
-}  // namespace
-
-ContactReport report(const ContactState& c) {
-  ContactReport r;
-  r.active = c.active_count;
-  r.stick = c.stick_count;
-  r.slip = c.slip_count;
-  r.iterations = c.sweeps;
-  r.normal_force = c.normal_force;
-  r.tangential_force = c.tangential_force;
-  r.friction_dissipation = c.friction_dissipation;
-  r.contact_work = c.contact_work;
-  r.contact_work_normal = c.contact_work_normal;
-  return r;
-}
-
-ContactReport report(const PenaltyState& p) {
-  ContactReport r;
-  r.active = p.active_count;
-  r.stick = p.stick_count;
-  r.slip = p.slip_count;
-  r.normal_force = p.normal_force;
-  r.tangential_force = p.tangential_force;
-  r.friction_dissipation = p.friction_dissipation;
-  r.contact_work = p.contact_work;
-  r.contact_work_normal = p.contact_work_normal;
-  r.contact_energy = p.stored_energy;
-  return r;
-}
-
-namespace {
 
 // Steps at which the history is sampled: k * interval rounded to the nearest step, and the last.
 std::vector<long> sample_steps(const RunSettings& s, long planned) {
@@ -87,10 +55,9 @@ double angular_momentum(const Model& model, const State& s) {
 // Cells with a node on a contact boundary: the candidate nodes, and the boundary nodes of the
 // master bodies of body pairs.
 std::vector<std::uint8_t> contact_boundary_cells(const Model& model, const RunSettings& settings,
-                                                 const std::vector<ContactCandidate>* candidates) {
+                                                 const std::vector<ContactCandidate>& candidates) {
   std::vector<std::uint8_t> node(model.num_nodes(), 0), cell(model.num_cells(), 0);
-  if (candidates)
-    for (const ContactCandidate& c : *candidates) node[c.node] = 1;
+  for (const ContactCandidate& c : candidates) node[c.node] = 1;
   for (const BodyPair& bp : settings.body_pairs)
     if (bp.master >= 0 && bp.master < static_cast<int>(model.bodies.size()))
       for (int n : model.bodies[bp.master].boundary_nodes) node[n] = 1;
@@ -132,7 +99,8 @@ void locate_cell(const Model& model, const State& s, int cell, StressPeak& p) {
 struct HistoryInputs {
   const State& s;
   const Energies& e;
-  const ContactReport& c;
+  const ContactStep& c;     // the contact set's last step
+  const ContactTotals& ct;  // and its run totals
   double energy_error = 0.0;      // [-]
   Vec2 momentum = Vec2::Zero();   // [kg m/s]
   double von_mises = 0.0;         // [Pa]
@@ -162,16 +130,22 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   fn("contact_nodes", of([](const X& h) { return static_cast<double>(h.c.active); }));
   fn("normal_force", of([](const X& h) { return h.c.normal_force; }));
   fn("tangential_force", of([](const X& h) { return h.c.tangential_force; }));
-  fn("contact_work", of([](const X& h) { return h.c.contact_work; }));
+  fn("contact_work", of([](const X& h) { return h.ct.contact_work; }));
   fn("contact_stick", of([](const X& h) { return static_cast<double>(h.c.stick); }));
   fn("contact_slip", of([](const X& h) { return static_cast<double>(h.c.slip); }));
   fn("contact_iterations", of([](const X& h) { return static_cast<double>(h.c.iterations); }));
-  fn("contact_energy", of([](const X& h) { return h.c.contact_energy; }));
+  fn("contact_energy", of([](const X& h) { return h.c.stored_energy; }));
   fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
-  fn("contact_work_normal", of([](const X& h) { return h.c.contact_work_normal; }));
+  fn("contact_work_normal", of([](const X& h) { return h.ct.contact_work_normal; }));
 }
 
 }  // namespace
+
+std::size_t History::column(const std::string& name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  if (it == columns.end()) throw std::out_of_range("no history column '" + name + "'");
+  return static_cast<std::size_t>(it - columns.begin());
+}
 
 std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
   std::vector<std::string> c;
@@ -181,9 +155,8 @@ std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
   return c;
 }
 
-RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
-                       const std::vector<ContactCandidate>* candidates, const std::vector<Surface>* surfaces)
-    : model_(model), settings_(settings), result_(result), candidates_(candidates), surfaces_(surfaces) {
+RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact)
+    : model_(model), settings_(settings), result_(result), contact_(contact) {
   if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
     throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
   result.dt = settings.dt;
@@ -200,12 +173,12 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   result.history.values.reserve(samples_.size() * result.history.columns.size());
   result.fields.reserve(field_steps_.size());
   monitor_every_ = std::max(1, settings.monitor_every);
-  contact_cell_ = contact_boundary_cells(model, settings, candidates_);
+  contact_cell_ = contact_boundary_cells(model, settings, contact.candidates);
   tracking_.contact_cell = contact_cell_.data();
   tracking_.measure = settings.stress_measure;
   result.stress_measure = settings.stress_measure;
   result.total_mass = 0.5 * model.mass.sum();
-  if (candidates_) result.contact_candidates = static_cast<int>(candidates_->size());
+  result.contact_candidates = static_cast<int>(contact.candidates.size());
   wall0_ = std::chrono::steady_clock::now();
   cpu0_ = std::clock();
 }
@@ -237,11 +210,11 @@ void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
   }
 }
 
-void RunMonitor::contact_step(double t_begin, double dt, int active, double normal_force,
-                              double tangential_force) {
-  result_.contact_impulse_normal += normal_force * dt;
-  result_.contact_impulse_tangential += tangential_force * dt;
-  if (active > 0) {
+void RunMonitor::contact_step(double t_begin, double dt) {
+  const ContactStep& c = contact_.last;
+  result_.contact_impulse_normal += c.normal_force * dt;
+  result_.contact_impulse_tangential += c.tangential_force * dt;
+  if (c.active > 0) {
     if (result_.contact_first_time < 0.0) result_.contact_first_time = t_begin;
     result_.contact_last_time = t_begin + dt;
   }
@@ -260,14 +233,15 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   result_.diverged_time = s.time;
 }
 
-bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0) {
+bool RunMonitor::observe(const State& s, double kinetic0) {
   const long n = s.step;
   if (n == 0) u0_ = s.u;
+  const ContactStep& c = contact_.last;
   Energies e = observe_energies(model_, s, u0_);
-  e.friction_dissipation = c.friction_dissipation;
-  if (n == 0) result_.initial_energy = kinetic0 + e.strain + e.hourglass + c.contact_energy;
+  e.friction_dissipation = contact_.total.friction_dissipation;
+  if (n == 0) result_.initial_energy = kinetic0 + e.strain + e.hourglass + c.stored_energy;
   reference_energy_ = std::max({reference_energy_, result_.initial_energy, std::abs(e.external_work)});
-  const double total = e.total() + c.contact_energy;
+  const double total = e.total() + c.stored_energy;
   if (!std::isfinite(total) || !std::isfinite(e.external_work)) {
     diverge(s, "non-finite state");
     return false;
@@ -283,15 +257,15 @@ bool RunMonitor::observe(const State& s, const ContactReport& c, double kinetic0
   }
   // The balance counts the stored contact (penalty) energy with the bodies' energies.
   Energies balance = e;
-  balance.strain += c.contact_energy;
+  balance.strain += c.stored_energy;
   const double error = energy_error(balance, result_.initial_energy, reference_energy_);
 
   if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
     const double vm = std::sqrt(last_peaks_.all);
     max_into(result_.von_mises_sampled_max, von_mises_maxima(model_, s.u.data()));
-    const double depth = candidates_ ? penetration(model_, settings_.obstacles, surfaces_ ? *surfaces_ : kNoSurfaces, *candidates_, s.u) : 0.0;
+    const double depth = penetration(model_, settings_.obstacles, contact_, s.u);
     auto& v = result_.history.values;
-    const HistoryInputs row{s, e, c, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
+    const HistoryInputs row{s, e, c, contact_.total, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
     history_fields(&row, [&v](const char*, double value) { v.push_back(value); });
     for (const auto& pr : settings_.probes) {
       const int d = 2 * pr.node;
@@ -324,6 +298,14 @@ void RunMonitor::finish(const State& s) {
   if (result_.wall_seconds > 0.0)
     result_.element_steps_per_second =
         static_cast<double>(model_.num_cells()) * static_cast<double>(s.step) / result_.wall_seconds;
+  const ContactTotals& c = contact_.total;
+  result_.friction_dissipation = c.friction_dissipation;
+  result_.contact_work = c.contact_work;
+  result_.contact_steps = c.steps_with_contact;
+  result_.contact_sweeps_max = c.iterations_max;
+  result_.contact_unconverged_steps = c.unconverged_steps;
+  if (c.steps_with_contact > 0)
+    result_.contact_sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
 }
 
 }  // namespace ricochet

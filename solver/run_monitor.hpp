@@ -8,29 +8,16 @@
 #include <ctime>
 #include <vector>
 
-#include "solver/run.hpp"
+#include "solver/contact_set.hpp"
+#include "solver/run_types.hpp"
 
 namespace ricochet {
 
-// Contact results of the last step and accumulated contact energies, whatever the scheme.
-struct ContactReport {
-  int active = 0, stick = 0, slip = 0, iterations = 0;
-  double normal_force = 0.0, tangential_force = 0.0;  // [N]
-  double friction_dissipation = 0.0;  // [J], accumulated
-  double contact_work = 0.0;          // [J], accumulated
-  double contact_work_normal = 0.0;   // [J], accumulated: the normal reactions' part
-  double contact_energy = 0.0;        // stored penalty energy [J], now
-};
-
-ContactReport report(const ContactState& c);
-ContactReport report(const PenaltyState& p);
-
 class RunMonitor {
  public:
-  // `candidates` are the node-obstacle pairs whose penetration is measured (may be empty), and
-  // `surfaces` the master surfaces of the body pairs among them.
-  RunMonitor(const Model& model, const RunSettings& settings, RunResult& result,
-             const std::vector<ContactCandidate>* candidates, const std::vector<Surface>* surfaces = nullptr);
+  // `contact` is the scheme's contact set (no candidates: no contact), read at every observation:
+  // its candidates' penetration, its observables, and at the end its run totals.
+  RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact);
 
   long planned_steps() const { return planned_; }
   bool is_monitor_step(long n) const;
@@ -38,7 +25,7 @@ class RunMonitor {
   // At a monitor step: energies from s (after an evaluate with energy), divergence checks,
   // the history row and field snapshot when scheduled. Returns false if the run diverged.
   // `kinetic0` is the kinetic energy of the initial conditions (used at n = 0).
-  bool observe(const State& s, const ContactReport& c, double kinetic0);
+  bool observe(const State& s, double kinetic0);
 
   // What the force pass of step n ranks (internal_forces()): the run's stress measure, the
   // cells with a node on a contact boundary (a contact candidate node, or a boundary node of a
@@ -50,21 +37,21 @@ class RunMonitor {
   // Every step, before observe(): folds the peaks of the state s (t_n) into the run's maxima.
   void track_stress(const State& s, const StressPeaks& peaks);
 
-  // Every step whose contact forces act over [t_begin, t_begin + dt]: accumulates the contact impulses
-  // and the first and last contact times. `active` is the number of active contacts.
-  void contact_step(double t_begin, double dt, int active, double normal_force, double tangential_force);
+  // Every step whose contact forces (the contact set's last step) act over [t_begin, t_begin + dt]:
+  // accumulates the contact impulses and the first and last contact times.
+  void contact_step(double t_begin, double dt);
 
   // Records a divergence found by the scheme itself (e.g. det F <= 0, a failed solve).
   void diverge(const State& s, std::string reason);
 
+  // End of the run: timings, steps, and the contact set's run totals.
   void finish(const State& s);
 
  private:
   const Model& model_;
   const RunSettings& settings_;
   RunResult& result_;
-  const std::vector<ContactCandidate>* candidates_;
-  const std::vector<Surface>* surfaces_;  // master surfaces of the body pairs (may be null)
+  const ContactSet& contact_;
   long planned_ = 0;
   std::vector<long> samples_, field_steps_;
   std::size_t next_sample_ = 0, next_field_ = 0;

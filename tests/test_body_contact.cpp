@@ -12,6 +12,8 @@
 #include "harness/input_error.hpp"
 #include "harness/mesh_generators.hpp"
 #include "solver/implicit.hpp"
+#include "solver/bipotential_contact.hpp"
+#include "solver/penalty_contact.hpp"
 #include "solver/run.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.
 #include "alloc_counter.hpp"
@@ -51,7 +53,7 @@ const char* name(Scheme s) {
 RunResult run(const Model& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
-    const PenaltyState p = make_penalty_state(model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
+    const PenaltyContact p = make_penalty_contact(model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
     s.dt = std::min(s.dt, penalty_stable_time_step(model, p, 0.9));
   }
   if (scheme == Scheme::implicit) return run_implicit(model, s, ImplicitSettings{});
@@ -352,8 +354,8 @@ TEST(BodyContact, PairStepsDoNotAllocate) {
     HeadOn h(0.2, {1.0, -0.3});
     const double dt = 0.5 * h.model.critical_dt;
     State s = initial_state(h.model, {}, dt);
-    ContactState c = make_contact_state(h.model, {}, {{}, {}}, {}, h.settings.body_pairs);
-    PenaltyState p = make_penalty_state(h.model, {}, {{}, {}}, {}, {}, h.settings.body_pairs);
+    BipotentialContact c = make_bipotential_contact(h.model, {}, {{}, {}}, {}, h.settings.body_pairs);
+    PenaltyContact p = make_penalty_contact(h.model, {}, {{}, {}}, {}, {}, h.settings.body_pairs);
     for (int n = 0; n < 5; ++n) {  // warm up
       evaluate(h.model, {}, s, false);
       if (scheme == Scheme::penalty) penalty_phase(h.model, {}, p, s);
@@ -366,10 +368,10 @@ TEST(BodyContact, PairStepsDoNotAllocate) {
       evaluate(h.model, {}, s, false);
       if (scheme == Scheme::penalty) {
         penalty_phase(h.model, {}, p, s);
-        active = std::max(active, p.active_count);
+        active = std::max(active, p.set.last.active);
       } else {
         contact_phase(h.model, {}, h.settings.contact, c, s);
-        active = std::max(active, c.active_count);
+        active = std::max(active, c.set.last.active);
       }
       update(s);
     }
@@ -397,7 +399,7 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
       int active = 0;
       for (int n = 0; n < 200; ++n) {
         ASSERT_TRUE(integrator.step(n % 10 == 0)) << integrator.failure();
-        active = std::max(active, integrator.contact().active_count);
+        active = std::max(active, integrator.contact().last.active);
       }
       EXPECT_EQ(g_allocations.load() - before, 0);
       EXPECT_GT(active, 2);  // the bars' interface and the striker on the floor

@@ -14,7 +14,7 @@
 #include <random>
 #include <vector>
 
-#include "solver/contact.hpp"
+#include "solver/bipotential_contact.hpp"
 #include "solver/coulomb.hpp"
 #include "solver/observers.hpp"
 #include "solver/run.hpp"
@@ -321,26 +321,27 @@ struct Impact {
   // step at t_n after the contact phase.
   std::vector<StepRecord> run(long steps) const {
     State s = initial_state(model, {}, dt);
-    ContactState c = make_contact_state(model, obstacles, {{mu}}, {});
+    BipotentialContact b = make_bipotential_contact(model, obstacles, {{mu}}, {});
+    const ContactSet& c = b.set;
     const Eigen::VectorXd u0 = s.u;
     std::vector<StepRecord> out;
     out.reserve(steps + 1);
     for (long n = 0; n <= steps; ++n) {
       evaluate(model, {}, s, true);
-      contact_phase(model, obstacles, settings, c, s);
+      contact_phase(model, obstacles, settings, b, s);
       const Energies e = observe_energies(model, s, u0);
       StepRecord r;
       r.time = s.time;
       r.momentum = linear_momentum(model, s);
       r.total_energy = e.total();
-      r.active = c.active_count;
-      r.stick = c.stick_count;
-      r.slip = c.slip_count;
-      r.normal_force = c.normal_force;
-      r.tangential_force = c.tangential_force;
-      r.contact_work = c.contact_work;
-      r.friction_dissipation = c.friction_dissipation;
-      r.penetration = penetration(model, obstacles, c.candidates, s.u);
+      r.active = c.last.active;
+      r.stick = c.last.stick;
+      r.slip = c.last.slip;
+      r.normal_force = c.last.normal_force;
+      r.tangential_force = c.last.tangential_force;
+      r.contact_work = c.total.contact_work;
+      r.friction_dissipation = c.total.friction_dissipation;
+      r.penetration = penetration(model, obstacles, c, s.u);
       r.min_gap = (model.ref.row(1).transpose() + s.u(Eigen::seq(1, Eigen::last, 2))).minCoeff();
       r.min_contact_vn = r.min_contact_vt = std::numeric_limits<double>::infinity();
       r.max_contact_vt = -std::numeric_limits<double>::infinity();
@@ -606,19 +607,20 @@ TEST(ContactImpact, FrictionlessPairNeverPullsWhenAnotherPairHasFriction) {
                                                    {"far_wall", Vec2(10.0, 0.0), -Vec2::UnitX()}};
       const double dt = 0.3 * model.critical_dt;
       State s = initial_state(model, {}, dt);
-      ContactState c = make_contact_state(model, obstacles, {{0.0, 0.0, mu_far}}, {});
+      BipotentialContact b = make_bipotential_contact(model, obstacles, {{0.0, 0.0, mu_far}}, {});
+      const ContactSet& c = b.set;
       double rn_min = 0.0, y_min = 1.0;
       long unconverged = 0, both_active = 0;
       for (int n = 0; n < 200; ++n) {
         evaluate(model, {}, s, false);
-        contact_phase(model, obstacles, ContactSettings{}, c, s);
+        contact_phase(model, obstacles, ContactSettings{}, b, s);
         int ground = 0;
         for (int k : c.active) {
           rn_min = std::min(rn_min, c.reaction[k].n);
           ground += c.candidates[k].obstacle == 0;
         }
         both_active += ground > 0;
-        unconverged += !c.converged;
+        unconverged += !c.last.converged;
         update(s);
         for (int i = 0; i < model.num_nodes(); ++i) y_min = std::min(y_min, model.ref(1, i) + s.u[2 * i + 1]);
       }

@@ -8,7 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "solver/contact.hpp"
+#include "solver/obstacle.hpp"
+#include "solver/penalty_contact.hpp"
 #include "solver/implicit.hpp"
 #include "solver/run.hpp"
 #include "verification_meshes.hpp"
@@ -164,7 +165,7 @@ Drop drop(Scheme scheme, const Obstacle& ob, double y0, double mu, double end_ti
   d.initial_energy = 0.5 * d.mass * 0.04;
   if (scheme == Scheme::penalty) {
     set.contact_method = RunSettings::ContactMethod::penalty;
-    const PenaltyState p = make_penalty_state(model, set.obstacles, set.friction, {}, set.penalty);
+    const PenaltyContact p = make_penalty_contact(model, set.obstacles, set.friction, {}, set.penalty);
     set.dt = penalty_stable_time_step(model, p, 0.5);
   } else {
     set.dt = 0.5 * model.critical_dt;

@@ -61,11 +61,11 @@ TEST(PenaltyStiffness, RectangularCellsByHand) {
   for (ElementKind kind : {ElementKind::q4_full, ElementKind::q4_viscous}) {
     const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, kind, kThick);
     const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
-    const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
-    ASSERT_EQ(p.candidates.size(), 6u) << "all six nodes are boundary nodes";
+    const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
+    ASSERT_EQ(p.set.candidates.size(), 6u) << "all six nodes are boundary nodes";
     const double fke = f * kBulk * kThick;
-    for (std::size_t c = 0; c < p.candidates.size(); ++c) {
-      const int node = p.candidates[c].node;
+    for (std::size_t c = 0; c < p.set.candidates.size(); ++c) {
+      const int node = p.set.candidates[c].node;
       const bool middle = node == 1 || node == 4;
       EXPECT_NEAR(p.stiffness[c], (middle ? 2.0 : 1.25) * fke, 1e-12 * fke) << "node " << node;
     }
@@ -95,8 +95,8 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   tri.tris.push_back({0, 1, 2});
   const Model model = single_body_model(tri, stiff_material(), PlaneMode::stress, ElementKind::t3, kThick);
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
-  const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
-  ASSERT_EQ(p.candidates.size(), 3u);
+  const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
+  ASSERT_EQ(p.set.candidates.size(), 3u);
   const double scale = f * kBulk * kThick / (2.0 * (0.5 * a * b)), c2 = a * a + b * b;
   const double expected[3] = {scale * (a * a + b * b), scale * (a * a + c2), scale * (b * b + c2)};
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(p.stiffness[i], expected[i], 1e-12 * expected[i]);
@@ -110,16 +110,16 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
                                       {"wall", Vec2::Zero(), Vec2::UnitX()}};
   const std::vector<PrescribedDof> held{{2 * 24 + 1, PrescribedDof::Kind::velocity, 0.0, 0.0}};
   for (double fsi : {0.1, 10.0}) {
-    const PenaltyState g = make_penalty_state(gm, two, {{0.0, 0.2}}, held, {fsi});
-    EXPECT_EQ(g.candidates.size(), 2u * 15u) << "16 boundary nodes, less node 24, x 2 obstacles";
-    for (std::size_t c = 0; c < g.candidates.size(); ++c) {
-      EXPECT_NE(g.candidates[c].node, 24);
+    const PenaltyContact g = make_penalty_contact(gm, two, {{0.0, 0.2}}, held, {fsi});
+    EXPECT_EQ(g.set.candidates.size(), 2u * 15u) << "16 boundary nodes, less node 24, x 2 obstacles";
+    for (std::size_t c = 0; c < g.set.candidates.size(); ++c) {
+      EXPECT_NE(g.set.candidates[c].node, 24);
       EXPECT_NEAR(g.stiffness[c], fsi * kBulk * kThick, 1e-12 * fsi * kBulk * kThick);
-      EXPECT_EQ(g.candidates[c].friction_coeff, g.candidates[c].obstacle == 0 ? 0.0 : 0.2);
+      EXPECT_EQ(g.set.candidates[c].friction_coeff, g.set.candidates[c].obstacle == 0 ? 0.0 : 0.2);
     }
-    EXPECT_TRUE(g.any_friction);
+    EXPECT_TRUE(g.set.any_friction);
   }
-  EXPECT_THROW(make_penalty_state(gm, two, {{0.0, 0.0}}, {}, {0.0}), std::invalid_argument);
+  EXPECT_THROW(make_penalty_contact(gm, two, {{0.0, 0.0}}, {}, {0.0}), std::invalid_argument);
 }
 
 TEST(PenaltyStiffness, SoftConstraintByHand) {
@@ -133,9 +133,9 @@ TEST(PenaltyStiffness, SoftConstraintByHand) {
   // 2 sqrt(m / k1) = 2 dt sqrt(2 / SOFSCL), whatever the node's mass.
   const Model soft = single_body_model(mesh, StVenantKirchhoff::make(1e6, kNu, kRho, PlaneMode::stress),
                                        PlaneMode::stress, ElementKind::q4_full, kThick);
-  const PenaltyState p = make_penalty_state(soft, ground, {{0.0}}, {}, {0.1, scale, dt});
-  for (std::size_t c = 0; c < p.candidates.size(); ++c) {
-    const double m = soft.mass[2 * p.candidates[c].node];
+  const PenaltyContact p = make_penalty_contact(soft, ground, {{0.0}}, {}, {0.1, scale, dt});
+  for (std::size_t c = 0; c < p.set.candidates.size(); ++c) {
+    const double m = soft.mass[2 * p.set.candidates[c].node];
     EXPECT_NEAR(p.stiffness[c], scale * m / (2.0 * dt * dt), 1e-12 * p.stiffness[c]);
     EXPECT_LT(p.bulk_stiffness[c], 1e-2 * p.stiffness[c]);
   }
@@ -143,11 +143,11 @@ TEST(PenaltyStiffness, SoftConstraintByHand) {
   // The stiff material of the other tests: its bulk springs (1.25-2 f K e = 1e6-1.7e6 N/m at
   // f_si 0.3) exceed k1 = 2.5e5-5e5 N/m, so SOFT = 1 changes nothing.
   const Model stiff = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
-  const PenaltyState plain = make_penalty_state(stiff, ground, {{0.0}}, {}, {0.3});
-  const PenaltyState with_soft = make_penalty_state(stiff, ground, {{0.0}}, {}, {0.3, scale, dt});
-  for (std::size_t c = 0; c < plain.candidates.size(); ++c) EXPECT_EQ(with_soft.stiffness[c], plain.stiffness[c]);
+  const PenaltyContact plain = make_penalty_contact(stiff, ground, {{0.0}}, {}, {0.3});
+  const PenaltyContact with_soft = make_penalty_contact(stiff, ground, {{0.0}}, {}, {0.3, scale, dt});
+  for (std::size_t c = 0; c < plain.set.candidates.size(); ++c) EXPECT_EQ(with_soft.stiffness[c], plain.stiffness[c]);
   // SOFT = 1 needs the step it is based on.
-  EXPECT_THROW(make_penalty_state(soft, ground, {{0.0}}, {}, {0.1, scale, 0.0}), std::logic_error);
+  EXPECT_THROW(make_penalty_contact(soft, ground, {{0.0}}, {}, {0.1, scale, 0.0}), std::logic_error);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -186,15 +186,15 @@ struct PenaltyImpact {
   double soft_scale = 0.0, soft_dt = 0.0;  // LS-DYNA SOFT = 1 (PenaltySettings)
   double dt = 0.0;
 
-  PenaltyState state() const {
-    return make_penalty_state(model, obstacles, {{mu}}, {}, {f_si, soft_scale, soft_dt});
+  PenaltyContact state() const {
+    return make_penalty_contact(model, obstacles, {{mu}}, {}, {f_si, soft_scale, soft_dt});
   }
 
   // evaluate -> penalty_phase -> update; each step recorded at t_n after the penalty phase.
   // Diverged: an inverted cell, a non-finite value, or energy above 10 x the initial.
   RunOutput run(long steps) const {
     State s = initial_state(model, {}, dt);
-    PenaltyState p = state();
+    PenaltyContact p = state();
     const Eigen::VectorXd u0 = s.u;
     RunOutput out;
     out.steps.reserve(steps + 1);
@@ -209,23 +209,23 @@ struct PenaltyImpact {
       r.kinetic = e.kinetic;
       r.kinetic_shadow = 0.5 * s.v_half.cwiseProduct(s.v_half + dt * s.a).dot(model.mass);
       r.strain = e.strain;
-      r.stored = p.stored_energy;
-      r.dissipation = p.friction_dissipation;
-      r.contact_work = p.contact_work;
-      r.active = p.active_count;
-      r.stick = p.stick_count;
-      r.slip = p.slip_count;
-      r.normal_force = p.normal_force;
-      r.tangential_force = p.tangential_force;
+      r.stored = p.set.last.stored_energy;
+      r.dissipation = p.set.total.friction_dissipation;
+      r.contact_work = p.set.total.contact_work;
+      r.active = p.set.last.active;
+      r.stick = p.set.last.stick;
+      r.slip = p.set.last.slip;
+      r.normal_force = p.set.last.normal_force;
+      r.tangential_force = p.set.last.tangential_force;
       r.penetration = p.penetration;
       // Compared, not subtracted: a - b * c may be contracted into an FMA, which would see
       // the rounding of mu f_n.
-      for (std::size_t c = 0; c < p.candidates.size(); ++c) {
-        const double cap = p.candidates[c].friction_coeff * p.force_n[c];
-        const double ft = std::abs(p.force_t[c]);
+      for (std::size_t c = 0; c < p.set.candidates.size(); ++c) {
+        const double cap = p.set.candidates[c].friction_coeff * p.set.reaction[c].n;
+        const double ft = std::abs(p.set.reaction[c].t);
         r.outside_cone += ft > cap;
-        r.slip_off_cap += p.status[c] == ContactStatus::slip && ft != cap;
-        r.stick_on_cap += p.status[c] == ContactStatus::stick && !(ft < cap);
+        r.slip_off_cap += p.set.status[c] == ContactStatus::slip && ft != cap;
+        r.stick_on_cap += p.set.status[c] == ContactStatus::stick && !(ft < cap);
       }
       if (n == 0) e0 = r.energy();
       out.steps.push_back(r);
@@ -268,10 +268,10 @@ double max_penetration(const RunOutput& r) {
 // d = v sqrt(M / sum k) ~ f_si^-1/2. The block's own compliance only lowers it (some energy
 // stays in strain and vibration), so it is also an upper bound.
 double rigid_body_penetration(const PenaltyImpact& im, double speed) {
-  const PenaltyState p = im.state();
+  const PenaltyContact p = im.state();
   double sum_k = 0.0;
-  for (std::size_t c = 0; c < p.candidates.size(); ++c)
-    if (im.model.ref(1, p.candidates[c].node) == im.model.ref.row(1).minCoeff()) sum_k += p.stiffness[c];
+  for (std::size_t c = 0; c < p.set.candidates.size(); ++c)
+    if (im.model.ref(1, p.set.candidates[c].node) == im.model.ref.row(1).minCoeff()) sum_k += p.stiffness[c];
   return speed * std::sqrt(0.5 * im.model.mass.sum() / sum_k);
 }
 
@@ -422,7 +422,7 @@ double resting_energy_growth(double f_si, double dt) {
   const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress,
                                         ElementKind::q4_full, kThick, 0.1, Vec2(0.0, -1000.0));
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
-  PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f_si});
+  PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f_si});
   State s = initial_state(model, {}, dt);
   const Eigen::VectorXd u0 = s.u;
   double early = 0.0, emax = 0.0;
@@ -431,7 +431,7 @@ double resting_energy_growth(double f_si, double dt) {
     evaluate(model, {}, s, true);
     penalty_phase(model, ground, p, s);
     const Energies e = observe_energies(model, s, u0);
-    const double energy = e.kinetic + e.strain + p.stored_energy;
+    const double energy = e.kinetic + e.strain + p.set.last.stored_energy;
     if (!std::isfinite(energy) || !(s.forces.min_jacobian > 0.0))
       return std::numeric_limits<double>::infinity();
     if (s.time <= 2e-4) early = std::max(early, energy);
@@ -454,7 +454,7 @@ TEST(PenaltyTimeStep, MinimumOfTheTwoLimitsIsNoBoundTheCombinedStepIs) {
   Mesh mesh = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
   const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
-  const PenaltyState p = make_penalty_state(model, ground, {{0.0}}, {}, {f});
+  const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
   const double dt_min = std::min(model.critical_dt, penalty_critical_dt(model, p));
   const double grow_min90 = resting_energy_growth(f, 0.9 * dt_min);
   const double grow_min95 = resting_energy_growth(f, 0.95 * dt_min);
@@ -610,11 +610,11 @@ TEST(PenaltyFriction, SlowBlockSticksAndStaysInsideTheCone) {
                                   kThick, 0.1, Vec2(0.0, -g));
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i] = v0;
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
-  PenaltyState p = make_penalty_state(model, ground, {{mu}}, {}, {0.1});
+  PenaltyContact p = make_penalty_contact(model, ground, {{mu}}, {}, {0.1});
   const double mass = 0.5 * model.mass.sum();
   double sum_k = 0.0;
-  for (std::size_t c = 0; c < p.candidates.size(); ++c)
-    if (model.ref(1, p.candidates[c].node) == 0.0) sum_k += p.stiffness[c];
+  for (std::size_t c = 0; c < p.set.candidates.size(); ++c)
+    if (model.ref(1, p.set.candidates[c].node) == 0.0) sum_k += p.stiffness[c];
   Eigen::VectorXd u_init = Eigen::VectorXd::Zero(model.num_dofs());
   for (int i = 0; i < model.num_nodes(); ++i) u_init[2 * i + 1] = -mass * g / sum_k;
   const double dt = penalty_stable_time_step(model, p, 0.9);
@@ -628,15 +628,15 @@ TEST(PenaltyFriction, SlowBlockSticksAndStaysInsideTheCone) {
     evaluate(model, {}, s, true);
     penalty_phase(model, ground, p, s);
     const Energies e = observe_energies(model, s, u0);
-    const double energy = e.kinetic + e.strain + p.stored_energy + p.friction_dissipation - e.external_work;
+    const double energy = e.kinetic + e.strain + p.set.last.stored_energy + p.set.total.friction_dissipation - e.external_work;
     if (n == 0) e0 = energy;
     err = std::max(err, std::abs(energy - e0));
-    for (std::size_t c = 0; c < p.candidates.size(); ++c) {
-      const double cap = mu * p.force_n[c], ft = std::abs(p.force_t[c]);
+    for (std::size_t c = 0; c < p.set.candidates.size(); ++c) {
+      const double cap = mu * p.set.reaction[c].n, ft = std::abs(p.set.reaction[c].t);
       outside += ft > cap;
-      stick_on_cap += p.status[c] == ContactStatus::stick && !(ft < cap);
+      stick_on_cap += p.set.status[c] == ContactStatus::stick && !(ft < cap);
     }
-    stick_steps += p.stick_count > 0;
+    stick_steps += p.set.last.stick > 0;
     if (n == half) x_half = mean_x();
     if (n > half) x_swing = std::max(x_swing, std::abs(mean_x() - x_half));
     if (n < steps) update(s);
@@ -645,20 +645,20 @@ TEST(PenaltyFriction, SlowBlockSticksAndStaysInsideTheCone) {
   std::printf("[penalty] sticking block: stopped after %.3e m (v0^2 / (2 mu g) = %.3e m), "
               "D = %.4f x 1/2 M v0^2, steps with stick %ld of %ld, last step %d/%d stick, "
               "swing over the last 0.5 ms %.2e m, max |E - E0| = %.2e x 1/2 M v0^2\n",
-              x_half, v0 * v0 / (2 * mu * g), p.friction_dissipation / kinetic_t, stick_steps,
-              steps + 1, p.stick_count, p.active_count, x_swing, err / kinetic_t);
+              x_half, v0 * v0 / (2 * mu * g), p.set.total.friction_dissipation / kinetic_t, stick_steps,
+              steps + 1, p.set.last.stick, p.set.last.active, x_swing, err / kinetic_t);
   EXPECT_EQ(outside, 0) << "|f_t| <= mu f_n";
   EXPECT_EQ(stick_on_cap, 0) << "sticking below the cap";
   EXPECT_GT(stick_steps, steps / 2);
-  EXPECT_EQ(p.active_count, 5) << "the bottom row stays on the line";
-  EXPECT_EQ(p.stick_count, p.active_count);
+  EXPECT_EQ(p.set.last.active, 5) << "the bottom row stays on the line";
+  EXPECT_EQ(p.set.last.stick, p.set.last.active);
   // Stopped near v0^2 / (2 mu g) = 2.5 um, and held: the swing is the springs' elastic
   // vibration (measured 0.8 um peak to peak: ~10 % of 1/2 M v0^2 in springs of sum k =
   // 4.2e6 N/m gives +-0.35 um), far below the 25 um that sliding on at v0 would cover.
   EXPECT_NEAR(x_half, v0 * v0 / (2 * mu * g), 0.5 * v0 * v0 / (2 * mu * g));
   EXPECT_LT(x_swing, 0.1 * v0 * 0.5e-3);
-  EXPECT_GT(p.friction_dissipation, 0.8 * kinetic_t);
-  EXPECT_LT(p.friction_dissipation, kinetic_t);
+  EXPECT_GT(p.set.total.friction_dissipation, 0.8 * kinetic_t);
+  EXPECT_LT(p.set.total.friction_dissipation, kinetic_t);
   EXPECT_LT(err, 0.01 * kinetic_t);
 }
 
@@ -670,18 +670,18 @@ TEST(PenaltyPhase, DoesNotAllocate) {
   for (double mu : {0.0, 0.3}) {
     const PenaltyImpact im = make_block(0.02, 0.01, 4, 2, 1e-5, {2.0, -1.0}, 0.1, mu);
     State s = initial_state(im.model, {}, im.dt);
-    PenaltyState p = im.state();
+    PenaltyContact p = im.state();
     long contact_steps = 0;
     const long before = g_allocations.load();
     for (long n = 0; n < std::lround(1.5e-4 / im.dt); ++n) {
       evaluate(im.model, {}, s, n % 2 == 0);
       penalty_phase(im.model, im.obstacles, p, s);
-      contact_steps += p.active_count > 0;
+      contact_steps += p.set.last.active > 0;
       update(s);
     }
     EXPECT_EQ(g_allocations.load() - before, 0) << "mu " << mu;
     EXPECT_GT(contact_steps, 10);
-    EXPECT_EQ(p.active_count, 0);
+    EXPECT_EQ(p.set.last.active, 0);
   }
 }
 

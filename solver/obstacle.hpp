@@ -1,16 +1,12 @@
-// Frictional contact of body nodes with rigid obstacles, solved implicitly by the bi-potential
-// method inside an explicit step (the paper's semi-explicit scheme, Eqs. (4)-(5)):
-// after evaluate() gives the free accelerations, contact_phase() finds the reactions R at
-// t+dt so that U = U_lib + U_c, U_c = dt^2 M^-1 R, leaves no contact node inside an obstacle,
-// and adds R/m to the accelerations.
+// Rigid obstacles (rigid foundations) and the one geometric query every scheme asks of them:
+// the signed gap and the outward normal of a point, closest(), and the frame a step's contact
+// is solved in, step_frame().
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "solver/body_contact.hpp"
-#include "solver/central_difference.hpp"
-#include "solver/coulomb.hpp"
+#include "solver/types.hpp"
 
 namespace ricochet {
 
@@ -108,113 +104,6 @@ inline ObstacleContact step_frame(const Obstacle& ob, const Vec2& x_start, const
   const Vec2 x_mid = 0.5 * (x_start + x_pred);
   const ObstacleContact m = closest(ob, x_mid);
   return {m.gap + m.normal.dot(x_pred - x_mid), m.normal};
-}
-
-// Which quantity x the local problem is written on (docs/background.md, Rigid obstacle: the
-// closed-form fixed point; an open question of Cros et al. 2010, Eq. (5)).
-enum class ContactLevel {
-  position,  // x = (gap at t+dt, slip increment over the step), w = dt^2/m: no penetration at t+dt
-  velocity,  // x = relative velocity v_{n+1/2}, w = dt/m, active when the predicted gap <= 0
-};
-
-struct ContactSettings {
-  ContactLevel level = ContactLevel::position;
-  double rho_factor = 1.0;    // rho = rho_factor / w per contact (1 = inverse local compliance)
-  double tolerance = 1e-10;   // Gauss-Seidel stops when every |dr| <= tolerance |r|
-  int max_sweeps = 200;       // Gauss-Seidel sweep cap per step
-};
-
-// One potential contact: a boundary node of a body facing an obstacle (pair = -1), or a
-// boundary node of a pair's slave body facing its master body's surface (obstacle = -1).
-struct ContactCandidate {
-  int node = 0;
-  int obstacle = 0;
-  double friction_coeff = 0.0;  // mu of this body-obstacle (or body-body) pair [-]
-  int pair = -1;                // index into the body pairs; -1 for a rigid obstacle
-};
-
-// Preallocated working set and per-step results of the contact phase.
-struct ContactState {
-  std::vector<ContactCandidate> candidates;
-  std::vector<LocalPair> reaction;       // per candidate, last step's r (N)
-  std::vector<LocalPair> x_free;         // per candidate, this step's free x
-  std::vector<ContactStatus> status;     // per candidate
-  std::vector<int> active;               // candidate indices active this step
-  std::vector<double> weight;            // per candidate, w = local compliance
-  // Per candidate, the outward normal of closest() at the predicted position, frozen for the
-  // step: `reaction` is expressed in this frame (n, t = (n_y, -n_x)).
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> node_reaction;  // per node, sum of r in global axes [N]
-  bool any_friction = false;
-  // Contact between bodies (body_contact.hpp): per pair the master's surface and, per step, its
-  // bounding box; per candidate the nodes its reaction acts on and the tracked master segment.
-  std::vector<Surface> surfaces;
-  std::vector<Box2> boxes;
-  std::vector<Stencil> stencil;          // per candidate (rigid obstacles: the node alone)
-  std::vector<int> segment;              // per candidate, master segment of the last step (-1 none)
-
-  // Results of the last step.
-  int active_count = 0, stick_count = 0, slip_count = 0;
-  int sweeps = 0;                 // Gauss-Seidel sweeps of the last step
-  bool converged = true;
-  double normal_force = 0.0;      // sum r_n [N]
-  double tangential_force = 0.0;  // sum r_t along each obstacle's tangent [N]
-  // Accumulated over the run.
-  double friction_dissipation = 0.0;  // sum -r_t x_t (slip work) [J]
-  double contact_work = 0.0;          // work of all contact reactions on the bodies [J]
-  double contact_work_normal = 0.0;   // the part of contact_work done by the normal reactions [J]
-  long sweeps_total = 0, steps_with_contact = 0;
-  int sweeps_max = 0;
-  long unconverged_steps = 0;
-};
-
-// Candidates: the boundary nodes of each body paired with each obstacle, then the boundary
-// nodes of each pair's slave body, less nodes with a prescribed DOF. `friction[b][o]` is mu of
-// body b against obstacle o.
-ContactState make_contact_state(const Model& model, const std::vector<Obstacle>& obstacles,
-                                const std::vector<std::vector<double>>& friction,
-                                const std::vector<PrescribedDof>& prescribed,
-                                const std::vector<BodyPair>& pairs = {});
-
-// After evaluate(): solves the contact reactions of step n -> n+1 and adds them to s.a.
-void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const ContactSettings& settings, ContactState& c, State& s);
-
-// Largest depth of any candidate node behind its obstacle, or inside its pair's master body
-// (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this, on its own
-// candidate list; `surfaces` are the pairs' master surfaces (may be empty without pairs).
-double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
-                   const Eigen::VectorXd& u);
-inline double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                          const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
-  return penetration(model, obstacles, {}, candidates, u);
-}
-
-// Fills candidate k's stencil, gap, frame and segment for a body pair: the segment choice of
-// body_contact.hpp with the start positions X + u and the evaluation positions eval(j). Returns
-// false (and clears the tracked segment) when the node faces no master segment. `Set` is a
-// ContactState or a PenaltyState (same candidate, surface, box, segment and stencil arrays).
-template <class Set, class Eval>
-bool pair_contact_geometry(const Model& model, Set& c, int k, const Eigen::VectorXd& u,
-                           const Eigen::VectorXd& v, const Eval& eval, NodeSegment& out) {
-  const ContactCandidate& cc = c.candidates[k];
-  const Surface& surf = c.surfaces[cc.pair];
-  if (!c.boxes[cc.pair].contains(eval(cc.node))) {
-    c.segment[k] = -1;
-    return false;
-  }
-  auto start = [&](int j) -> Vec2 { return model.ref.col(j) + u.segment<2>(2 * j); };
-  auto vel = [&](int j) -> Vec2 { return v.segment<2>(2 * j); };
-  out = find_segment(surf, cc.node, c.segment[k], start, eval, vel);
-  c.segment[k] = out.segment;
-  if (out.segment < 0) return false;
-  const SurfaceSegment& sg = surf.segments[out.segment];
-  Stencil& st = c.stencil[k];
-  st.count = 3;
-  st.node = {cc.node, sg.a, sg.b};
-  st.coef = {1.0, -(1.0 - out.xi), -out.xi};
-  return true;
 }
 
 }  // namespace ricochet
