@@ -48,6 +48,7 @@ void finish_step(ContactSet& c, int iterations, bool converged) {
   c.last.active = static_cast<int>(c.active.size());
   c.last.iterations = iterations;
   c.last.converged = converged;
+  c.total.status_changes += c.last.status_changes;
   if (!converged) ++c.total.unconverged_steps;
   if (c.active.empty()) return;
   ++c.total.steps_with_contact;

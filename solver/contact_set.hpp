@@ -71,6 +71,7 @@ struct ContactCandidate {
 // Results of the last step.
 struct ContactStep {
   int active = 0, stick = 0, slip = 0;  // contacts with a reaction, and how they hold
+  int status_changes = 0;               // candidates whose status (open, stick, slip) changed
   int iterations = 0;                   // sweeps of the solve (bi-potential schemes)
   bool converged = true;                // the solve met its tolerance
   double normal_force = 0.0;            // sum r_n [N]
@@ -87,6 +88,7 @@ struct ContactTotals {
   long iterations_total = 0;          // over the steps with contact
   int iterations_max = 0;
   long unconverged_steps = 0;         // steps whose solve hit its iteration cap
+  long status_changes = 0;            // sum of ContactStep::status_changes
 };
 
 // The candidates, their per-step geometry and reactions, and the observables.
@@ -166,9 +168,10 @@ inline void begin_step(ContactSet& c) {
 }
 
 // The step's verdict on candidate k: its status (open, stick, slip) with its final reaction in
-// c.reaction[k]. Counts, for a closed contact, the stick/slip counts and the force sums. Call it once per
-// candidate and step; the closed ones in ascending order.
+// c.reaction[k]. Counts the status change, and for a closed contact the stick/slip counts and
+// the force sums. Call it once per candidate and step; the closed ones in ascending order.
 inline void record(ContactSet& c, int k, ContactStatus status) {
+  c.last.status_changes += status != c.status[k];
   c.status[k] = status;
   if (status == ContactStatus::open) return;
   c.last.stick += status == ContactStatus::stick;

@@ -137,6 +137,7 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   fn("contact_energy", of([](const X& h) { return h.c.stored_energy; }));
   fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
   fn("contact_work_normal", of([](const X& h) { return h.ct.contact_work_normal; }));
+  fn("contact_status_changes", of([](const X& h) { return static_cast<double>(h.c.status_changes); }));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 //   momentum, the tangential impulse is 0 and the horizontal velocity stays 3 m/s.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -74,6 +75,37 @@ TEST(ContactObservables, FrictionlessPlateImpulseIsTheMomentumChange) {
   EXPECT_EQ(r.contact_first_time, 0.0);
   EXPECT_GT(r.contact_last_time, 1.5e-3);
   EXPECT_LT(r.contact_last_time, 2.9e-3);
+}
+
+// The per-step count of status changes (history contact_status_changes), in every scheme, on the
+// oblique plate with friction sampled at every step. A change of the closed contacts' number, or
+// of the stick or slip counts, needs at least as many status changes; the plate lands and
+// leaves, so contacts close and open; after it has left nothing changes.
+TEST(ContactObservables, StatusChangesBoundTheCountChanges) {
+  for (const char* scheme : {"semi_explicit", "implicit", "explicit_penalty"}) {
+    const RunResult r = run("cases/oblique_plate.toml", {std::string("scheme=\"") + scheme + "\"", "mesh=\"M1\"",
+                                                          "output.fields=[]", "output.interval=0", "time.dt=2e-6"});
+    ASSERT_EQ(r.status, RunStatus::ok) << scheme << ": " << r.reason;
+    const History& h = r.history;
+    const std::size_t ch = h.column("contact_status_changes"), st = h.column("contact_stick"),
+                      sl = h.column("contact_slip");
+    ASSERT_EQ(h.rows(), static_cast<std::size_t>(r.steps + 1)) << scheme;
+    double total = 0.0, closed_max = 0.0;
+    long last_change = -1;
+    for (std::size_t i = 1; i < h.rows(); ++i) {
+      const double changes = h.at(i, ch);
+      const double d_stick = std::abs(h.at(i, st) - h.at(i - 1, st)), d_slip = std::abs(h.at(i, sl) - h.at(i - 1, sl));
+      const double d_closed = std::abs(h.at(i, st) + h.at(i, sl) - h.at(i - 1, st) - h.at(i - 1, sl));
+      ASSERT_GE(changes, std::max({d_stick, d_slip, d_closed})) << scheme << " row " << i;
+      total += changes;
+      closed_max = std::max(closed_max, h.at(i, st) + h.at(i, sl));
+      if (changes > 0.0) last_change = static_cast<long>(i);
+    }
+    EXPECT_GT(closed_max, 0.0) << scheme;
+    EXPECT_GE(total, 2.0 * closed_max) << scheme << ": every closed contact closed and opened again";
+    EXPECT_EQ(last(h, "contact_stick") + last(h, "contact_slip"), 0.0) << scheme << ": the plate has left";
+    EXPECT_LT(last_change, static_cast<long>(h.rows()) - 10) << scheme << ": no changes in free flight";
+  }
 }
 
 }  // namespace

@@ -447,7 +447,7 @@ TEST(Explicit, HistoryLayout) {
       "momentum_x",    "momentum_y",     "von_mises_max",  "penetration_max",
       "contact_nodes", "normal_force",   "tangential_force", "contact_work",
       "contact_stick", "contact_slip",   "contact_iterations", "contact_energy",
-      "angular_momentum", "contact_work_normal"};
+      "angular_momentum", "contact_work_normal", "contact_status_changes"};
   const Model model = vibrating_slab(ElementKind::q4_viscous, 0.2);
   const std::vector<Probe> probes = {{"tip", 16}, {"mid", 42}};
   RunSettings s;
