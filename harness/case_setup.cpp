@@ -99,7 +99,6 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   }
 
   RunSettings& s = p.settings;
-  p.dt_auto = !c.dt.has_value();
   s.end_time = c.end_time;
   s.sample_interval = c.sample_interval;
   s.field_times = c.field_times;
@@ -144,13 +143,13 @@ PreparedCase prepare_case(const CaseSpec& spec) {
                                                     : RunSettings::ContactMethod::bipotential;
   // The soft constraint's springs k1 = soft_scale m / (2 dt^2) use the step the run would have
   // without them: the elements' automatic step, or the fixed time.dt (LS-DYNA: the initial step).
-  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto ? stable_time_step(p.model, c.dt_safety) : *c.dt;
+  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto() ? stable_time_step(p.model, c.dt_safety) : *c.dt;
   // The automatic step: safety x the solver's critical step, which with penalty contact is the
   // combined limit of elements and springs (min(dt_e, dt_p) alone is not stable when the two
   // are close: tests/test_penalty_contact.cpp).
   // It also gives the springs' own limit, which the summary reports for fixed steps too.
   const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
-  s.dt = p.dt_auto ? c.dt_safety * critical : *c.dt;
+  s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");

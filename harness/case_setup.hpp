@@ -21,8 +21,9 @@ struct PreparedCase {
   CaseSpec spec;
   std::vector<Mesh> meshes;  // per body, after scale and offset, with all node sets
   Model model;
-  RunSettings settings;
-  bool dt_auto = false;
+  RunSettings settings;     // settings.dt: the step of the run, decided by prepare_case
+  // The step was chosen automatically (time.dt absent): safety x critical_time_step().
+  bool dt_auto() const { return !spec.dt.has_value(); }
   double penalty_critical_dt = 0.0;  // 2 sqrt(m/k) over the penalty springs [s]; 0 if none
   std::vector<ProbeInfo> probes;
 };

@@ -114,8 +114,8 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["nodes"] = pc.model.num_nodes();
   j["elements"] = pc.model.num_cells();
   j["dt"] = r.dt;
-  j["dt_mode"] = pc.dt_auto ? "auto" : "fixed";
-  j["dt_safety"] = pc.dt_auto ? Json(c.dt_safety) : Json();
+  j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
+  j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();
   j["critical_dt"] = pc.model.critical_dt;
   j["penalty_critical_dt"] = pc.penalty_critical_dt > 0.0 ? Json(pc.penalty_critical_dt) : Json();
   j["end_time"] = c.end_time;

@@ -98,7 +98,6 @@ PreparedCase stability_trial_case(const PreparedCase& pc, double dt, const Stabi
   PreparedCase t = pc;
   t.settings.dt = dt;
   t.spec.dt = dt;
-  t.dt_auto = false;
   if (opt.end_time) {
     t.settings.end_time = *opt.end_time;
     t.spec.end_time = *opt.end_time;

@@ -121,7 +121,7 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
         depth = std::max(depth, h.at(row, h.column("penetration_max")));
       EXPECT_EQ(r.penetration_max, depth);
       if (scheme == "explicit_penalty") {
-        EXPECT_TRUE(pc.dt_auto);
+        EXPECT_TRUE(pc.dt_auto());
         ASSERT_GT(pc.penalty_critical_dt, 0.0);
         EXPECT_LE(r.dt, 0.9 * std::min(pc.model.critical_dt, pc.penalty_critical_dt));
         const double combined = 1.0 / std::sqrt(1.0 / (pc.model.critical_dt * pc.model.critical_dt) +
@@ -134,7 +134,7 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
                     "springs %.4e), penetration %.3e m (estimate %.3e m)\n",
                     mu, r.dt, pc.model.critical_dt, pc.penalty_critical_dt, r.penetration_max, delta);
       } else {
-        EXPECT_FALSE(pc.dt_auto);
+        EXPECT_FALSE(pc.dt_auto());
         EXPECT_EQ(r.dt, 1e-5);
         EXPECT_EQ(pc.penalty_critical_dt, 0.0);
         EXPECT_LE(r.penetration_max, 1e-9);
