@@ -369,7 +369,7 @@ int stability_command(const std::vector<std::string>& args) {
             write_run_outputs(dir / "trials" / name, tc, r);
           }
         });
-    if (!out_dir.empty()) write_file_atomic(dir / "stability.json", stability_report(pc, opt, res).dump());
+    if (!out_dir.empty()) write_file_atomic(dir / "stability.json", dump_json(stability_report(pc, opt, res)));
     std::printf("%s%s\n", stability_summary_line(pc, res).c_str(), out_dir.empty() ? "" : ("  -> " + out_dir).c_str());
     switch (res.outcome) {
       case StabilityOutcome::bracketed: return 0;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "harness/case_setup.hpp"
-#include "harness/json_writer.hpp"
+#include "harness/json_io.hpp"
 
 namespace ricochet {
 

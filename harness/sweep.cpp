@@ -34,7 +34,7 @@
 #include "harness/csv_writer.hpp"
 #include "harness/gates.hpp"
 #include "harness/input_error.hpp"
-#include "harness/json_writer.hpp"
+#include "harness/json_io.hpp"
 
 extern char** environ;
 
@@ -97,20 +97,15 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-void flatten_into(const JsonValue& v, const std::string& name, std::vector<FlatField>& out) {
-  switch (v.kind) {
-    case JsonValue::Kind::object:
-      if (v.members.empty()) {
-        out.push_back({name, "", true});
-        return;
-      }
-      for (const auto& [k, m] : v.members) flatten_into(m, name.empty() ? k : name + "." + k, out);
-      return;
-    case JsonValue::Kind::null: out.push_back({name, "", true}); return;
-    case JsonValue::Kind::boolean: out.push_back({name, v.boolean ? "true" : "false", false}); return;
-    case JsonValue::Kind::number:
-    case JsonValue::Kind::string: out.push_back({name, v.text, false}); return;
-    case JsonValue::Kind::array: out.push_back({name, v.compact(), false}); return;
+void flatten_into(const Json& v, const std::string& name, std::vector<FlatField>& out) {
+  if (v.is_object() && !v.empty()) {
+    for (const auto& [k, m] : v.items()) flatten_into(m, name.empty() ? k : name + "." + k, out);
+  } else if (v.is_null() || v.is_object()) {
+    out.push_back({name, "", true});
+  } else if (v.is_string()) {
+    out.push_back({name, v.get<std::string>(), false});
+  } else {
+    out.push_back({name, compact_json(v), false});
   }
 }
 
@@ -125,7 +120,7 @@ std::string request_text(const SweepRun& run, int repeat, const std::string& bas
   for (const auto& a : run.set_args()) o.push_back(a);
   j["overrides"] = o;
   j["repeats"] = repeat;
-  return j.dump();
+  return dump_json(j);
 }
 
 // ---- subprocesses ----
@@ -226,29 +221,32 @@ struct Record {
   enum class State { pending, active, done } state = State::pending;
   bool resumed = false;
   std::string status, reason;         // ok / diverged / failed
-  std::optional<JsonValue> summary;   // the run's summary.json (the last repeat's)
+  std::optional<Json> summary;        // the run's summary.json (the last repeat's)
   std::vector<double> wall, cpu;      // per repeat, from the summaries [s]
   bool errors_done = false;
   std::vector<std::pair<std::string, std::string>> errors;  // error columns, cached
   std::optional<SummaryRow> row;                             // its summary.csv row, cached
 };
 
-double json_number(const JsonValue& s, std::string_view key, double fallback = std::nan("")) {
-  const JsonValue* v = s.find(key);
-  return v && v->is_number() ? v->number : fallback;
+double json_number(const Json& s, std::string_view key, double fallback = std::nan("")) {
+  const auto v = s.find(key);
+  return v != s.end() && v->is_number() ? v->get<double>() : fallback;
 }
 
-std::string json_text(const JsonValue& s, std::string_view key) {
-  const JsonValue* v = s.find(key);
-  return v && (v->is_number() || v->is_string()) ? v->text : std::string();
+// A string member as it is, a number as summary.csv shows it; empty otherwise.
+std::string json_text(const Json& s, std::string_view key) {
+  const auto v = s.find(key);
+  if (v == s.end()) return {};
+  if (v->is_string()) return v->get<std::string>();
+  return v->is_number() ? compact_json(*v) : std::string();
 }
 
 // Fills status/reason from a finished run's summary.json.
-void set_finished(Record& rec, JsonValue summary) {
+void set_finished(Record& rec, Json summary) {
   rec.status = json_text(summary, "status");
   if (rec.status != "ok" && rec.status != "diverged") rec.status = "diverged";
   rec.reason.clear();
-  if (const JsonValue* d = summary.find("diverged"); d && d->is_object()) rec.reason = json_text(*d, "reason");
+  if (const auto d = summary.find("diverged"); d != summary.end() && d->is_object()) rec.reason = json_text(*d, "reason");
   rec.summary = std::move(summary);
 }
 
@@ -264,7 +262,7 @@ bool load_finished(const fs::path& folder, const std::string& request, int repea
   try {
     std::vector<double> wall, cpu;
     for (int k = 1; k <= repeat; ++k) {
-      const JsonValue s = read_json_file(repeat_dir(folder, repeat, k) / "summary.json");
+      const Json s = read_json_file(repeat_dir(folder, repeat, k) / "summary.json");
       wall.push_back(json_number(s, "wall_seconds"));
       cpu.push_back(json_number(s, "cpu_seconds"));
     }
@@ -453,7 +451,7 @@ class Sweep {
       t.wall += seconds(Clock::now() - t.started);
       const fs::path dir = repeat_dir(folder(t.run), repeats(t.run), t.k);
       Record& rec = recs_[t.run];
-      if (const std::optional<JsonValue> s = finished(decode(status), dir, rec)) {
+      if (const std::optional<Json> s = finished(decode(status), dir, rec)) {
         t.walls.push_back(json_number(*s, "wall_seconds"));
         t.cpus.push_back(json_number(*s, "cpu_seconds"));
         if (t.k < repeats(t.run)) {
@@ -498,7 +496,7 @@ class Sweep {
   }
 
   // The summary of a finished child, or nothing (and rec marked failed).
-  std::optional<JsonValue> finished(const Exit& e, const fs::path& dir, Record& rec) {
+  std::optional<Json> finished(const Exit& e, const fs::path& dir, Record& rec) {
     const std::string line = first_line(dir / "stderr.txt");
     if (e.signaled) {
       rec.status = "failed";
@@ -756,7 +754,7 @@ class Sweep {
     }
     j["reference"] = shared_reference_json();
     j["runs"] = list;
-    write_file_atomic(opt_.out_dir / "sweep.json", j.dump());
+    write_file_atomic(opt_.out_dir / "sweep.json", dump_json(j));
   }
 
   const SweepSpec& spec_;
@@ -791,10 +789,10 @@ long parse_count(const std::string& flag, const std::string& v, long hi) {
 
 const char* sweep_usage() { return kUsage; }
 
-std::vector<FlatField> flatten_summary(const JsonValue& summary) {
+std::vector<FlatField> flatten_summary(const Json& summary) {
   std::vector<FlatField> out;
   if (!summary.is_object()) return out;
-  for (const auto& [k, v] : summary.members) {
+  for (const auto& [k, v] : summary.items()) {
     if (k == "status") continue;
     flatten_into(v, k, out);
   }

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "harness/json_reader.hpp"
+#include "harness/json_io.hpp"
 #include "harness/reference_errors.hpp"
 #include "harness/sweep_spec.hpp"
 
@@ -71,7 +71,7 @@ struct FlatField {
 
 // A summary.json object flattened in document order; the `status` key is left out (it is the
 // table's own `status` column).
-std::vector<FlatField> flatten_summary(const JsonValue& summary);
+std::vector<FlatField> flatten_summary(const Json& summary);
 
 struct SummaryRow {
   std::string run_id, group, kind, status, reason;  // kind: "run" or "reference"
