@@ -26,18 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* kUsage =
-    "usage: ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]\n"
-    "  sweep     run every case of a sweep file; writes DIR/summary.csv, DIR/sweep.json, DIR/runs/\n"
-    "  --out     output folder (default: results/<sweep name>)\n"
-    "  --jobs    runs at the same time (default 1: one at a time, for clean timings)\n"
-    "  --repeat  run each case K times; summary.csv gets the median and the spread of the timings\n"
-    "  --check   then check the gates of GATES.toml on DIR/summary.csv (docs/gates.md); exit 4 if one fails\n"
-    "  --force   rerun the runs that an earlier sweep finished\n"
-    "  --quiet   no progress lines\n"
-    "  --help    this text\n"
-    "  exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 2 bad input, 1 other error\n";
-
 class Sweep {
  public:
   Sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& opt)
@@ -216,18 +204,7 @@ class Sweep {
   int lock_fd_ = -1;
 };
 
-long parse_count(const std::string& flag, const std::string& v, long hi) {
-  char* end = nullptr;
-  errno = 0;
-  const long x = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || errno != 0 || x < 1 || x > hi)
-    throw InputError("ricochet sweep: " + flag + ": expected an integer in [1, " + std::to_string(hi) + "]; got '" + v + "'");
-  return x;
-}
-
 }  // namespace
-
-const char* sweep_usage() { return kUsage; }
 
 SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options) {
   if (options.out_dir.empty()) throw InputError("ricochet sweep: no output folder");
@@ -241,48 +218,17 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
   return s.run();
 }
 
-int sweep_command(const std::vector<std::string>& args) {
-  return command_status(std::cerr, [&]() -> int {
-    std::string file, gates_file;
-    SweepOptions opt;
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      auto value = [&](const std::string& flag) -> std::string {
-        const auto eq = a.find('=');
-        if (a.rfind(flag + "=", 0) == 0) return a.substr(eq + 1);
-        if (i + 1 >= args.size()) throw InputError("ricochet sweep: " + flag + " needs a value");
-        return args[++i];
-      };
-      auto is = [&](const std::string& flag) { return a == flag || a.rfind(flag + "=", 0) == 0; };
-      if (is("--out")) opt.out_dir = value("--out");
-      else if (is("--jobs")) opt.jobs = static_cast<int>(parse_count("--jobs", value("--jobs"), kMaxSweepJobs));
-      else if (a == "-j") opt.jobs = static_cast<int>(parse_count("--jobs", value("-j"), kMaxSweepJobs));
-      else if (is("--repeat")) opt.repeat = static_cast<int>(parse_count("--repeat", value("--repeat"), 1000));
-      else if (is("--check")) gates_file = value("--check");
-      else if (a == "--force") opt.force = true;
-      else if (a == "--quiet" || a == "-q") opt.quiet = true;
-      else if (a == "--help" || a == "-h") {
-        std::fputs(kUsage, stdout);
-        return 0;
-      }
-      else if (!a.empty() && a[0] == '-')
-        throw InputError("ricochet sweep: unknown option '" + a + "'; allowed: --out, --jobs, --repeat, --check, --force, --quiet, --help");
-      else if (file.empty()) file = a;
-      else throw InputError("ricochet sweep: more than one sweep file ('" + file + "', '" + a + "')");
-    }
-    if (file.empty())
-      throw InputError("ricochet sweep: missing SWEEP.toml; usage: ricochet sweep SWEEP.toml [--out DIR] "
-                       "[--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]");
-    const SweepSpec spec = read_sweep(file);
-    if (opt.out_dir.empty()) opt.out_dir = fs::path("results") / spec.name;
-    const std::vector<SweepRun> runs = expand(spec);
-    // A bad gate file stops the sweep before any run.
-    const std::optional<GateFile> gates = gates_file.empty() ? std::nullopt : std::optional(read_gates(gates_file));
-    run_sweep(spec, runs, opt);
-    if (!gates) return 0;
-    const CsvTable table = read_csv(opt.out_dir / "summary.csv");
-    return run_gates(table, *gates, opt.out_dir / "gates-junit.xml", std::cout);
-  });
+int run_command(const SweepCommand& c, std::ostream& out) {
+  const SweepSpec spec = read_sweep(c.file);
+  SweepOptions opt = c.options;
+  if (opt.out_dir.empty()) opt.out_dir = fs::path("results") / spec.name;
+  const std::vector<SweepRun> runs = expand(spec);
+  // A bad gate file stops the sweep before any run.
+  const std::optional<GateFile> gates = c.gates_file.empty() ? std::nullopt : std::optional(read_gates(c.gates_file));
+  run_sweep(spec, runs, opt);
+  if (!gates) return 0;
+  const CsvTable table = read_csv(opt.out_dir / "summary.csv");
+  return run_gates(table, *gates, opt.out_dir / "gates-junit.xml", out);
 }
 
 }  // namespace ricochet

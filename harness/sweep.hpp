@@ -26,17 +26,6 @@
 
 namespace ricochet {
 
-// The `sweep` command: args are the words after `sweep`:
-//   SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]
-// Returns the exit status: 0 the sweep completed (diverged and failed runs are results) and,
-// with --check, every gate passed; 4 a gate failed (gates.hpp; report DIR/gates-junit.xml);
-// 2 bad input, gate file included (one line "ricochet: ..." on stderr, nothing written);
-// 1 any other error.
-int sweep_command(const std::vector<std::string>& args);
-
-// The usage text of the sweep command (several lines, ending in '\n').
-const char* sweep_usage();
-
 inline constexpr int kMaxSweepJobs = 1024;  // --jobs at most
 
 struct SweepOptions {
@@ -55,6 +44,20 @@ struct SweepOutcome {
   std::size_t executed = 0;  // run by this invocation
   std::size_t ok = 0, diverged = 0, failed = 0;  // over all runs
 };
+
+// `ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force]
+// [--quiet]`.
+struct SweepCommand {
+  std::string file;        // SWEEP.toml
+  std::string gates_file;  // --check GATES.toml; empty: no check
+  SweepOptions options;    // an empty out_dir: results/<sweep name>
+};
+
+// Reads the sweep file (and the gate file, before any run), runs the sweep and, with a gate
+// file, checks its gates on DIR/summary.csv (lines on `out`, report DIR/gates-junit.xml).
+// Returns 0 the sweep completed (diverged and failed runs are results) and every gate passed;
+// 4 a gate failed (gates.hpp). Throws InputError for bad input (nothing written).
+int run_command(const SweepCommand& c, std::ostream& out);
 
 // Runs a sweep: check_runs (sweep_plan.hpp) first (nothing is written on bad input), then the
 // runs, writing DIR/sweep.json, DIR/runs/<id>/ and DIR/summary.csv. Throws InputError for bad input and

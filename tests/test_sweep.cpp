@@ -18,6 +18,7 @@
 
 #include <toml++/toml.h>
 
+#include "harness/cli.hpp"
 #include "harness/input_error.hpp"
 #include "harness/json_io.hpp"
 #include "harness/reference_errors.hpp"
