@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <iostream>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -584,12 +583,6 @@ std::string join(const std::vector<std::string>& v, const std::string& sep) {
   return s;
 }
 
-constexpr const char* kCheckUsage =
-    "usage: ricochet check SUMMARY.csv GATES.toml [--junit FILE]\n"
-    "  checks the gates of GATES.toml (docs/gates.md) on the sweep table SUMMARY.csv\n"
-    "  --junit   JUnit XML report (default: gates-junit.xml next to SUMMARY.csv)\n"
-    "  exit status: 0 all gates pass, 4 a gate failed, 2 bad input, 1 other error\n";
-
 }  // namespace
 
 // -----------------------------------------------------------------------------------------------
@@ -742,44 +735,16 @@ int run_gates(const CsvTable& table, const GateFile& gates, const fs::path& juni
   return failed == 0 ? 0 : kGateFailedExit;
 }
 
-int check_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  return command_status(err, [&]() -> int {
-    std::vector<std::string> files;
-    std::string junit;
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      if (a == "--help" || a == "-h") {
-        out << kCheckUsage;
-        return 0;
-      }
-      if (a == "--junit") {
-        if (i + 1 >= args.size()) throw InputError("ricochet check: --junit needs a value");
-        junit = args[++i];
-        if (junit.empty()) throw InputError("ricochet check: --junit needs a non-empty file name");
-      } else if (a.rfind("--junit=", 0) == 0) {
-        junit = a.substr(8);
-        if (junit.empty()) throw InputError("ricochet check: --junit needs a non-empty file name");
-      } else if (!a.empty() && a[0] == '-') {
-        throw InputError("ricochet check: unknown option '" + a + "'; allowed: --junit");
-      } else {
-        files.push_back(a);
-      }
-    }
-    if (files.size() != 2)
-      throw InputError("ricochet check: expected SUMMARY.csv and GATES.toml; got " + std::to_string(files.size()) +
-                       " file argument(s); usage: ricochet check SUMMARY.csv GATES.toml [--junit FILE]");
-    const CsvTable table = read_csv(files[0]);
-    const GateFile gates = read_gates(files[1]);
-    const fs::path junit_path = junit.empty() ? fs::path(files[0]).parent_path() / "gates-junit.xml" : fs::path(junit);
-    // Once both inputs are read, whatever fails (e.g. writing the JUnit file) is not bad input.
-    try {
-      return run_gates(table, gates, junit_path, out);
-    } catch (const std::exception& e) {
-      throw std::runtime_error(e.what());
-    }
-  });
+int run_command(const CheckCommand& c, std::ostream& out) {
+  const CsvTable table = read_csv(c.summary_csv);
+  const GateFile gates = read_gates(c.gates_toml);
+  const fs::path junit_path = c.junit.empty() ? fs::path(c.summary_csv).parent_path() / "gates-junit.xml" : fs::path(c.junit);
+  // Once both inputs are read, whatever fails (e.g. writing the JUnit file) is not bad input.
+  try {
+    return run_gates(table, gates, junit_path, out);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(e.what());
+  }
 }
-
-int check_command(const std::vector<std::string>& args) { return check_command(args, std::cout, std::cerr); }
 
 }  // namespace ricochet

@@ -107,12 +107,16 @@ std::string junit_xml(const std::vector<GateResult>& results, const std::string&
 int run_gates(const CsvTable& table, const GateFile& gates, const std::filesystem::path& junit_path,
               std::ostream& out);
 
-// `ricochet check SUMMARY.csv GATES.toml [--junit FILE]` (args without "check"). The JUnit file
-// defaults to gates-junit.xml next to SUMMARY.csv. Returns 0 all gates passed, 4 a gate failed,
-// 2 bad input ("ricochet: FILE:LINE: ..." on `err`, nothing written), 1 the JUnit file could not
-// be written ("ricochet: error: ..." on `err`).
-int check_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
-int check_command(const std::vector<std::string>& args);  // std::cout, std::cerr
+// `ricochet check SUMMARY.csv GATES.toml [--junit FILE]`.
+struct CheckCommand {
+  std::string summary_csv, gates_toml;
+  std::string junit;  // empty: gates-junit.xml next to SUMMARY.csv
+};
+
+// Reads both files, then run_gates with the lines on `out`. Returns 0 all gates passed, 4 a gate
+// failed. Throws InputError for bad input (nothing written), std::runtime_error when the JUnit
+// file cannot be written.
+int run_command(const CheckCommand& c, std::ostream& out);
 
 inline constexpr int kGateFailedExit = 4;
 

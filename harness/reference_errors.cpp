@@ -17,26 +17,29 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double finite_or_inf(double d) { return std::isfinite(d) ? d : kInf; }
 
-// The number at a path of object keys, e.g. {"final", "angular_momentum"}; empty if any key is
-// missing or the value is not a number.
-std::optional<double> number_at(const JsonValue* s, std::initializer_list<std::string_view> path) {
-  const JsonValue* v = s;
-  for (const std::string_view k : path) {
-    if (!v) return std::nullopt;
-    v = v->find(k);
-  }
-  if (!v || !v->is_number()) return std::nullopt;
-  return v->number;
+// The member `key` of an object; nullptr if absent or `v` is not an object.
+const Json* member(const Json* v, std::string_view key) {
+  if (!v || !v->is_object()) return nullptr;
+  const auto it = v->find(key);
+  return it == v->end() ? nullptr : &*it;
 }
 
-bool is_ok(const JsonValue* s) {
-  if (!s) return false;
-  const JsonValue* v = s->find("status");
-  return v && v->is_string() && v->text == "ok";
+// The number at a path of object keys, e.g. {"final", "angular_momentum"}; empty if any key is
+// missing or the value is not a number.
+std::optional<double> number_at(const Json* s, std::initializer_list<std::string_view> path) {
+  const Json* v = s;
+  for (const std::string_view k : path) v = member(v, k);
+  if (!v || !v->is_number()) return std::nullopt;
+  return v->get<double>();
+}
+
+bool is_ok(const Json* s) {
+  const Json* v = member(s, "status");
+  return v && v->is_string() && v->get_ref<const std::string&>() == "ok";
 }
 
 // |a - b| of a scalar summary key of both runs.
-std::optional<double> scalar_difference(const JsonValue* run, const JsonValue* ref,
+std::optional<double> scalar_difference(const Json* run, const Json* ref,
                                         std::initializer_list<std::string_view> path) {
   const auto a = number_at(run, path), b = number_at(ref, path);
   if (!a || !b) return std::nullopt;
@@ -45,7 +48,7 @@ std::optional<double> scalar_difference(const JsonValue* run, const JsonValue* r
 
 // The rigid-body velocity (final momentum) / (total mass): rebound_velocity_x/_y if present,
 // else final.momentum_x/_y / total_mass.
-std::optional<std::pair<double, double>> rebound_velocity(const JsonValue* s) {
+std::optional<std::pair<double, double>> rebound_velocity(const Json* s) {
   const auto vx = number_at(s, {"rebound_velocity_x"}), vy = number_at(s, {"rebound_velocity_y"});
   if (vx && vy) return std::pair{*vx, *vy};
   const auto px = number_at(s, {"final", "momentum_x"}), py = number_at(s, {"final", "momentum_y"});
@@ -166,8 +169,8 @@ ReferenceMetrics compare_with_reference(const RunOutputs& run, const RunOutputs&
 
   // Summaries of two complete runs.
   if (!is_ok(run.summary) || !is_ok(ref.summary)) return m;
-  const JsonValue* a = run.summary;
-  const JsonValue* b = ref.summary;
+  const Json* a = run.summary;
+  const Json* b = ref.summary;
   if (const auto va = rebound_velocity(a), vb = rebound_velocity(b); va && vb)
     m.rebound_velocity = finite_or_inf(std::hypot(va->first - vb->first, va->second - vb->second));
   m.angular_momentum = scalar_difference(a, b, {"final", "angular_momentum"});

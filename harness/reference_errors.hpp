@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "harness/json_reader.hpp"
+#include "harness/json_io.hpp"
 
 namespace ricochet {
 
@@ -46,7 +46,7 @@ std::optional<double> trapezoid_integral(const HistoryTable& h, std::string_view
 
 // One finished run's outputs, either of which may be missing (nullptr).
 struct RunOutputs {
-  const JsonValue* summary = nullptr;     // its summary.json
+  const Json* summary = nullptr;          // its summary.json
   const HistoryTable* history = nullptr;  // its history.csv
 };
 

@@ -252,7 +252,7 @@ void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc,
     }
     write_file_atomic(dir / "fields" / "fields.pvd", format_pvd(series));
   }
-  write_file_atomic(dir / "summary.json", run_summary(pc, r).dump());
+  write_file_atomic(dir / "summary.json", dump_json(run_summary(pc, r)));
 }
 
 std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir) {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "harness/case_setup.hpp"
-#include "harness/json_writer.hpp"
+#include "harness/json_io.hpp"
 
 namespace ricochet {
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <ctime>
 #include <filesystem>
 #include <limits>
@@ -16,19 +15,6 @@
 
 namespace ricochet {
 namespace {
-
-constexpr const char* kUsage =
-    "usage: ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR] [--tolerance REL]\n"
-    "                         [--max-runs N] [--end TIME] [--energy-bound E] [--quiet]\n"
-    "  the largest stable time step of the case's scheme on its mesh, by bisection over runs\n"
-    "  --set           override a case key (as for `ricochet run`)\n"
-    "  --out           write DIR/stability.json and each trial's DIR/trials/NN/summary.json, history.csv\n"
-    "  --tolerance     stop when hi/lo - 1 <= REL (default 0.01)\n"
-    "  --max-runs      at most N trial runs (default 30)\n"
-    "  --end           time.end of every trial [s] (default: the case's)\n"
-    "  --energy-bound  a stable run keeps energy_error_max <= E (default 0.1)\n"
-    "  --quiet         no per-trial lines on stderr\n"
-    "  exit status: 0 bracket found, 5 no unstable dt up to the cap, 4 no bracket, 2 bad input\n";
 
 const char* status_name(RunStatus s) { return s == RunStatus::ok ? "ok" : "diverged"; }
 
@@ -51,19 +37,6 @@ std::string fmt(const char* format, double v) {
 bool uses_penalty_estimate(const PreparedCase& pc) {
   return pc.spec.scheme == Scheme::explicit_penalty && std::isfinite(pc.penalty_critical_dt) &&
          pc.penalty_critical_dt > 0.0;
-}
-
-double parse_number(const std::string& flag, const std::string& text, const char* expected) {
-  double v = 0.0;
-  std::size_t used = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(v))
-    throw InputError("ricochet stability: " + flag + ": expected " + expected + "; got \"" + text + "\"");
-  return v;
 }
 
 // "diverged" or "energy rule": what made the trial at dt unstable.
@@ -300,83 +273,44 @@ std::string stability_summary_line(const PreparedCase& pc, const StabilityResult
   return s + "  " + std::to_string(r.trials.size()) + " runs";
 }
 
-int stability_command(const std::vector<std::string>& args) {
-  return command_status(std::cerr, [&]() -> int {
-    std::string case_file, out_dir;
-    std::vector<std::string> sets;
-    StabilityOptions opt;
-    bool quiet = false;
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      std::string flag = a, inline_value;
-      bool has_inline = false;
-      if (a.rfind("--", 0) == 0 && a.find('=') != std::string::npos) {
-        flag = a.substr(0, a.find('='));
-        inline_value = a.substr(a.find('=') + 1);
-        has_inline = true;
-      }
-      auto value = [&]() -> std::string {
-        if (has_inline) return inline_value;
-        if (i + 1 >= args.size()) throw InputError("ricochet stability: " + flag + " needs a value");
-        return args[++i];
-      };
-      if (flag == "--set") sets.push_back(value());
-      else if (flag == "--out") out_dir = value();
-      else if (flag == "--tolerance") opt.tolerance = parse_number(flag, value(), "a number in (0, 10]");
-      else if (flag == "--energy-bound") opt.energy_bound = parse_number(flag, value(), "a number > 0");
-      else if (flag == "--end") opt.end_time = parse_number(flag, value(), "a time > 0 [s]");
-      else if (flag == "--max-runs") {
-        const std::string v = value();
-        const double n = parse_number(flag, v, "an integer in 1 ... 10000");
-        if (n != std::floor(n) || n < 1 || n > 10000)
-          throw InputError("ricochet stability: --max-runs: expected an integer in 1 ... 10000; got \"" + v + "\"");
-        opt.max_runs = static_cast<int>(n);
-      } else if ((a == "--quiet" || a == "-q") && !has_inline) quiet = true;
-      else if (a == "--help" || a == "-h") {
-        std::fputs(kUsage, stdout);
-        return 0;
-      } else if (!a.empty() && a[0] == '-')
-        throw InputError("ricochet stability: unknown option '" + a +
-                         "'; allowed: --set, --out, --tolerance, --max-runs, --end, --energy-bound, --quiet");
-      else if (case_file.empty()) case_file = a;
-      else throw InputError("ricochet stability: more than one case file ('" + case_file + "', '" + a + "')");
-    }
-    if (case_file.empty()) throw InputError("ricochet stability: missing CASE.toml; usage: ricochet stability CASE.toml [options] (--help for all)");
-    check_stability_options(opt);
+int run_command(const StabilityCommand& c) {
+  const StabilityOptions& opt = c.options;
+  const std::string& out_dir = c.out_dir;
+  const bool quiet = c.quiet;
+  check_stability_options(opt);
 
-    const CaseSpec spec = read_case(case_file, sets);
-    const PreparedCase pc = prepare_case(spec);
+  const CaseSpec spec = read_case(c.case_file, c.sets);
+  const PreparedCase pc = prepare_case(spec);
 
-    namespace fs = std::filesystem;
-    const fs::path dir(out_dir);
-    if (!out_dir.empty()) {  // an earlier search's results must not describe this one
-      fs::remove(dir / "stability.json");
-      fs::remove_all(dir / "trials");
-    }
-    const double estimate = stability_estimate(pc);
-    int index = 0;
-    const StabilityResult res = find_stable_dt(
-        pc, opt, [&](const StabilityTrial& t, const PreparedCase& tc, const RunResult& r) {
-          ++index;
-          if (!quiet)
-            std::fprintf(stderr, "  trial %2d: dt %.5g s (%.4g x estimate): %s%s%s  energy_error_max %.3g (gain %.3g, loss %.3g)  %ld/%ld steps  %.3g s\n",
-                         index, t.dt, t.dt / estimate, t.stable ? "stable" : "UNSTABLE", t.stable ? "" : " - ",
-                         t.reason.c_str(), t.energy_error_max, t.energy_gain_max, -t.energy_loss_max, t.steps,
-                         t.planned_steps, t.wall_seconds);
-          if (!out_dir.empty()) {
-            char name[16];
-            std::snprintf(name, sizeof name, "%02d", index);
-            write_run_outputs(dir / "trials" / name, tc, r);
-          }
-        });
-    if (!out_dir.empty()) write_file_atomic(dir / "stability.json", stability_report(pc, opt, res).dump());
-    std::printf("%s%s\n", stability_summary_line(pc, res).c_str(), out_dir.empty() ? "" : ("  -> " + out_dir).c_str());
-    switch (res.outcome) {
-      case StabilityOutcome::bracketed: return 0;
-      case StabilityOutcome::no_unstable_up_to_cap: return 5;
-      default: return 4;
-    }
-  });
+  namespace fs = std::filesystem;
+  const fs::path dir(out_dir);
+  if (!out_dir.empty()) {  // an earlier search's results must not describe this one
+    fs::remove(dir / "stability.json");
+    fs::remove_all(dir / "trials");
+  }
+  const double estimate = stability_estimate(pc);
+  int index = 0;
+  const StabilityResult res = find_stable_dt(
+      pc, opt, [&](const StabilityTrial& t, const PreparedCase& tc, const RunResult& r) {
+        ++index;
+        if (!quiet)
+          std::fprintf(stderr, "  trial %2d: dt %.5g s (%.4g x estimate): %s%s%s  energy_error_max %.3g (gain %.3g, loss %.3g)  %ld/%ld steps  %.3g s\n",
+                       index, t.dt, t.dt / estimate, t.stable ? "stable" : "UNSTABLE", t.stable ? "" : " - ",
+                       t.reason.c_str(), t.energy_error_max, t.energy_gain_max, -t.energy_loss_max, t.steps,
+                       t.planned_steps, t.wall_seconds);
+        if (!out_dir.empty()) {
+          char name[16];
+          std::snprintf(name, sizeof name, "%02d", index);
+          write_run_outputs(dir / "trials" / name, tc, r);
+        }
+      });
+  if (!out_dir.empty()) write_file_atomic(dir / "stability.json", dump_json(stability_report(pc, opt, res)));
+  std::printf("%s%s\n", stability_summary_line(pc, res).c_str(), out_dir.empty() ? "" : ("  -> " + out_dir).c_str());
+  switch (res.outcome) {
+    case StabilityOutcome::bracketed: return 0;
+    case StabilityOutcome::no_unstable_up_to_cap: return 5;
+    default: return 4;
+  }
 }
 
 }  // namespace ricochet

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "harness/case_setup.hpp"
-#include "harness/json_writer.hpp"
+#include "harness/json_io.hpp"
 
 namespace ricochet {
 
@@ -94,12 +94,20 @@ Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const
 std::string stability_summary_line(const PreparedCase& pc, const StabilityResult& r);
 
 // `ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR] [--tolerance REL]
-//  [--max-runs N] [--end TIME] [--energy-bound E] [--quiet]`; args are those after the word
-// `stability`. Prints the summary line (and, unless --quiet, one line per trial on stderr);
-// writes DIR/stability.json when --out is given. Returns the exit status: 0 bracket found,
-// 4 no bracket (no stable dt down to the floor, or --max-runs reached first), 5 no unstable
-// dt up to the cap, 2 bad input (one-line message on stderr, nothing written), 1 any other
-// error (e.g. the output could not be written).
-int stability_command(const std::vector<std::string>& args);
+//  [--max-runs N] [--end TIME] [--energy-bound E] [--quiet]`.
+struct StabilityCommand {
+  std::string case_file;
+  std::vector<std::string> sets;  // --set KEY=VALUE, in order
+  std::string out_dir;            // empty: nothing written
+  StabilityOptions options;
+  bool quiet = false;             // no per-trial lines on stderr
+};
+
+// Prints the summary line (and, unless quiet, one line per trial on stderr); writes
+// DIR/stability.json and DIR/trials/NN/ when out_dir is set. Returns the exit status: 0 bracket
+// found, 4 no bracket (no stable dt down to the floor, or max_runs reached first), 5 no unstable
+// dt up to the cap. Throws InputError for bad input (nothing written), anything else when an
+// output cannot be written.
+int run_command(const StabilityCommand& c);
 
 }  // namespace ricochet

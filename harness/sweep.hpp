@@ -4,6 +4,11 @@
 // reference run (harness/reference_errors.hpp: the sweep's shared [reference] or its group's own),
 // and keeps DIR/summary.csv, a complete table of the finished runs, up to date after every run.
 // Formats and keys: docs/sweeps.md.
+//
+// The parts: sweep_plan.hpp (the runs, their folders and requests, what is already done),
+// sweep_exec.hpp (the subprocesses, repeats, signals, progress), sweep_table.hpp (summary.csv),
+// sweep_errors.hpp (each run's errors against its reference); sweep.cpp puts them together and
+// writes DIR/sweep.json.
 #pragma once
 
 #include <cstddef>
@@ -14,22 +19,14 @@
 #include <utility>
 #include <vector>
 
-#include "harness/json_reader.hpp"
 #include "harness/reference_errors.hpp"
+#include "harness/sweep_plan.hpp"
 #include "harness/sweep_spec.hpp"
+#include "harness/sweep_table.hpp"
 
 namespace ricochet {
 
-// The `sweep` command: args are the words after `sweep`:
-//   SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force] [--quiet]
-// Returns the exit status: 0 the sweep completed (diverged and failed runs are results) and,
-// with --check, every gate passed; 4 a gate failed (gates.hpp; report DIR/gates-junit.xml);
-// 2 bad input, gate file included (one line "ricochet: ..." on stderr, nothing written);
-// 1 any other error.
-int sweep_command(const std::vector<std::string>& args);
-
-// The usage text of the sweep command (several lines, ending in '\n').
-const char* sweep_usage();
+inline constexpr int kMaxSweepJobs = 1024;  // --jobs at most
 
 struct SweepOptions {
   std::filesystem::path out_dir;     // DIR (required)
@@ -48,51 +45,23 @@ struct SweepOutcome {
   std::size_t ok = 0, diverged = 0, failed = 0;  // over all runs
 };
 
-// Validates every run's case (read_case of the run's base with its overrides) and, for every run
-// compared with a reference (and every reference run), its error probe. Throws InputError
-// "SWEEP:LINE: KEY: run ID: <the case's one-line error>".
-void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs);
+// `ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force]
+// [--quiet]`.
+struct SweepCommand {
+  std::string file;        // SWEEP.toml
+  std::string gates_file;  // --check GATES.toml; empty: no check
+  SweepOptions options;    // an empty out_dir: results/<sweep name>
+};
 
-// Runs a sweep: check_runs first (nothing is written on bad input), then the runs, writing
-// DIR/sweep.json, DIR/runs/<id>/ and DIR/summary.csv. Throws InputError for bad input and
+// Reads the sweep file (and the gate file, before any run), runs the sweep and, with a gate
+// file, checks its gates on DIR/summary.csv (lines on `out`, report DIR/gates-junit.xml).
+// Returns 0 the sweep completed (diverged and failed runs are results) and every gate passed;
+// 4 a gate failed (gates.hpp). Throws InputError for bad input (nothing written).
+int run_command(const SweepCommand& c, std::ostream& out);
+
+// Runs a sweep: check_runs (sweep_plan.hpp) first (nothing is written on bad input), then the
+// runs, writing DIR/sweep.json, DIR/runs/<id>/ and DIR/summary.csv. Throws InputError for bad input and
 // std::runtime_error if DIR cannot be written or the program cannot be started.
 SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options);
-
-// --- summary.csv ------------------------------------------------------------------------------
-
-// One summary.json value under its flattened name ("contact_iterations.mean"); arrays as compact
-// JSON; `null` marks a JSON null (or empty object), whose column is dropped if another run has
-// keys under the same name (e.g. "implicit" next to "implicit.theta").
-struct FlatField {
-  std::string name;
-  std::string value;
-  bool null = false;
-};
-
-// A summary.json object flattened in document order; the `status` key is left out (it is the
-// table's own `status` column).
-std::vector<FlatField> flatten_summary(const JsonValue& summary);
-
-struct SummaryRow {
-  std::string run_id, group, kind, status, reason;  // kind: "run" or "reference"
-  std::vector<std::pair<std::string, std::string>> swept;  // case key -> value (display form)
-  std::vector<FlatField> summary;                          // flattened summary.json; empty if failed
-  std::vector<std::pair<std::string, std::string>> extra;  // tail column -> value
-};
-
-struct SummaryLayout {
-  std::vector<std::string> swept;  // case-key columns, in this order (keys only rows have are appended)
-  std::vector<std::string> tail;   // the last columns, in this order
-};
-
-// The table: run_id, group, kind, status, reason, the swept keys, the union of the summary
-// columns in first-seen order (a later run's new key is placed next to its siblings), then the
-// tail columns. A summary column whose name is taken by an earlier column is prefixed with
-// "summary." (e.g. summary.scheme when `scheme` is swept). Fields are passed through csv_field.
-std::string format_summary_csv(const std::vector<SummaryRow>& rows, const SummaryLayout& layout);
-
-// format_summary_csv written with write_file_atomic.
-void write_summary_csv(const std::filesystem::path& path, const std::vector<SummaryRow>& rows,
-                       const SummaryLayout& layout);
 
 }  // namespace ricochet

@@ -1,12 +1,14 @@
-// The `ricochet run` command end to end: documented outputs on a good case; for each class of
+// The `ricochet` program end to end: `run`'s documented outputs on a good case; for each class of
 // bad input a single-line error naming the file and the key or line, exit status 2, and no
-// output folder.
+// output folder; the command line of every command (help, unknown options, every option shown).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -239,6 +241,124 @@ TEST_F(CliTest, EveryCommandAnswersHelp) {
         EXPECT_NE(o.output.find(option), std::string::npos) << command << " --help lacks " << option << ": " << o.output;
     }
   }
-  // Top-level usage without a command goes to stderr with exit 2 (no command is bad input).
+  // No command is bad usage: one line on stderr, exit 2.
   EXPECT_EQ(run("").status, 2);
+}
+
+namespace {
+
+const std::vector<std::string> kCommands = {"run", "sweep", "check", "stability", "report", "plot"};
+
+// The positional arguments of each command, as files that do not exist (under `dir`).
+std::string absent_files(const std::string& command, const fs::path& dir) {
+  if (command == "check") return (dir / "absent.csv").string() + " " + (dir / "absent.toml").string();
+  if (command == "report" || command == "plot") return (dir / "absent_dir").string();
+  return (dir / "absent.toml").string();
+}
+
+// An option as a --help text shows it: its names ("-j", "--jobs") and its value ("N"; empty for
+// a switch). Both ricochet's help and the report scripts' (argparse) put each option at the start
+// of a line, "  -j, --jobs N   help text".
+struct HelpOption {
+  std::vector<std::string> names;
+  std::string value;
+};
+
+std::vector<HelpOption> options_in(const std::string& help) {
+  std::vector<HelpOption> out;
+  std::istringstream lines(help);
+  for (std::string line; std::getline(lines, line);) {
+    const auto start = line.find_first_not_of(' ');
+    if (start == std::string::npos || start == 0 || line[start] != '-') continue;
+    std::string label = line.substr(start, line.find("  ", start) - start);
+    HelpOption o;
+    std::istringstream forms(label);
+    for (std::string form; std::getline(forms, form, ',');) {
+      form.erase(0, form.find_first_not_of(' '));
+      const auto space = form.find(' ');
+      o.names.push_back(form.substr(0, space));
+      if (space != std::string::npos) o.value = form.substr(space + 1);
+    }
+    out.push_back(o);
+  }
+  return out;
+}
+
+// A value that the option accepts, by the name of its value.
+std::string sample_value(const std::string& value, const fs::path& dir) {
+  if (value == "N" || value == "K") return "2";
+  if (value == "REL") return "0.01";
+  if (value == "TIME") return "0.001";
+  if (value == "E") return "0.1";
+  if (value == "KEY=VALUE") return "time.dt=1e-5";
+  return (dir / "value").string();
+}
+
+}  // namespace
+
+// An unknown option is bad usage: one line naming it, exit 2, for every command.
+TEST_F(CliTest, UnknownOptionOfEveryCommandIsOneLineAndExitTwo) {
+  for (const auto& command : kCommands) {
+    const Outcome o = run(command + " " + absent_files(command, dir_) + " --no-such-option");
+    EXPECT_EQ(o.status, 2) << command << ": " << o.output;
+    EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << command << ": " << o.output;
+    EXPECT_NE(o.output.find("--no-such-option"), std::string::npos) << command << ": " << o.output;
+  }
+  for (const std::string args : {"--no-such-option", "no-such-command", ""}) {
+    const Outcome o = run(args);
+    EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+    EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << args << ": " << o.output;
+    EXPECT_NE(o.output.find("allowed: run, sweep, check, stability, report, plot"), std::string::npos) << o.output;
+  }
+  // A missing value, an extra file: one line, exit 2 too.
+  for (const std::string& args : std::vector<std::string>{"run " + absent_files("run", dir_) + " --out", "sweep a.toml b.toml",
+                                   "check " + absent_files("check", dir_) + " --junit", "stability"}) {
+    const Outcome o = run(args);
+    EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+    EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << args << ": " << o.output;
+  }
+}
+
+// Every option that a command's --help shows is accepted, in each of its forms and with a value
+// where it takes one: the command goes on to read its (absent) input file and names it, rather
+// than rejecting the command line.
+TEST_F(CliTest, EveryOptionInTheHelpIsAccepted) {
+  for (const auto& command : kCommands) {
+    const Outcome help = run(command + " --help");
+    ASSERT_EQ(help.status, 0) << command << ": " << help.output;
+    const std::vector<HelpOption> options = options_in(help.output);
+    EXPECT_GE(options.size(), 2u) << command << ": " << help.output;
+    const std::string files = absent_files(command, dir_);
+    for (const HelpOption& option : options) {
+      for (const std::string& name : option.names) {
+        if (name == "-h" || name == "--help") continue;
+        std::string value;
+        if (!option.value.empty()) value.append(" ").append(sample_value(option.value, dir_));
+        const Outcome o = run(command + " " + files + " " + name + value);
+        EXPECT_EQ(o.status, 2) << command << " " << name << ": " << o.output;
+        EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << command << " " << name << ": " << o.output;
+        EXPECT_NE(o.output.find((dir_ / "absent").string()), std::string::npos)
+            << command << " " << name << value << " was not accepted: " << o.output;
+      }
+    }
+  }
+}
+
+// `ricochet --help` is the complete usage: every command with every option its own --help shows
+// (for report and plot, the options of their scripts, which the scripts' own --help lists).
+TEST_F(CliTest, TopLevelHelpListsEveryCommandsOptions) {
+  const Outcome top = run("--help");
+  ASSERT_EQ(top.status, 0) << top.output;
+  EXPECT_NE(top.output.find("--version"), std::string::npos);
+  for (const auto& command : kCommands) {
+    const auto at = top.output.find("\n" + command + ": ");
+    ASSERT_NE(at, std::string::npos) << command << " has no section in: " << top.output;
+    const auto end = top.output.find("\n\n", at + 1);
+    const std::string section = top.output.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    std::set<std::string> listed, own;
+    for (const HelpOption& o : options_in(section)) listed.insert(o.names.begin(), o.names.end());
+    for (const HelpOption& o : options_in(run(command + " --help").output)) own.insert(o.names.begin(), o.names.end());
+    EXPECT_EQ(listed, own) << command;
+  }
+  EXPECT_EQ(run("--version").output, std::string("ricochet ") + RICOCHET_VERSION + "\n");
 }

@@ -15,6 +15,7 @@
 
 #include "harness/csv_reader.hpp"
 #include "harness/gates.hpp"
+#include "harness/cli.hpp"
 #include "harness/input_error.hpp"
 
 namespace ricochet {

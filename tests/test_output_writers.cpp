@@ -17,7 +17,7 @@
 
 #include "harness/atomic_file.hpp"
 #include "harness/csv_writer.hpp"
-#include "harness/json_writer.hpp"
+#include "harness/json_io.hpp"
 #include "harness/vtu_writer.hpp"
 
 namespace ricochet {
@@ -42,7 +42,7 @@ void expect_same_bits(const std::string& text, double expected) {
 
 // ---------------------------------------------------------------- JSON
 
-TEST(JsonWriter, ExactOutputForSmallDocument) {
+TEST(Json, ExactOutputForSmallDocument) {
   Json doc = Json::object();
   doc["name"] = "first";
   doc["steps"] = 1200;
@@ -54,13 +54,14 @@ TEST(JsonWriter, ExactOutputForSmallDocument) {
   doc["list"].push_back(1);  // ... or an array
   doc["list"].push_back(-2.5);
   doc["list"].push_back(Json::object());
-  doc["list"].push_back(Json::array()).push_back(false);  // returns the new element
+  doc["list"].push_back(Json::array({false}));
   doc["extremes"].push_back(std::numeric_limits<std::int64_t>::min());
-  doc["extremes"].push_back(std::numeric_limits<std::int64_t>::max());
+  doc["extremes"].push_back(std::numeric_limits<std::uint64_t>::max());
   doc["extremes"].push_back(-inf_value);
+  doc["extremes"].push_back(2.0);
   doc["name"] = "taylor_bar";  // assigning an existing key keeps its place
   EXPECT_EQ(doc.size(), 8u);
-  EXPECT_EQ(doc.dump(),
+  EXPECT_EQ(dump_json(doc),
             "{\n"
             "  \"name\": \"taylor_bar\",\n"
             "  \"steps\": 1200,\n"
@@ -81,45 +82,78 @@ TEST(JsonWriter, ExactOutputForSmallDocument) {
             "  ],\n"
             "  \"extremes\": [\n"
             "    -9223372036854775808,\n"
-            "    9223372036854775807,\n"
-            "    null\n"
+            "    18446744073709551615,\n"
+            "    null,\n"
+            "    2.0\n"
             "  ]\n"
             "}\n");
-  EXPECT_EQ(Json::object().dump(), "{}\n");
-  EXPECT_EQ(Json::array().dump(), "[]\n");
-  EXPECT_EQ(Json().dump(), "null\n");
+  EXPECT_EQ(dump_json(Json::object()), "{}\n");
+  EXPECT_EQ(dump_json(Json::array()), "[]\n");
+  EXPECT_EQ(dump_json(Json()), "null\n");
 }
 
-TEST(JsonWriter, EscapesStringsAndKeys) {
+TEST(Json, EscapesStringsAndKeys) {
   const std::string nasty = std::string("q\"b\\s/\n\t\x01\x1f", 10) + std::string(1, '\0') + "é";
-  EXPECT_EQ(Json(nasty).dump(), "\"q\\\"b\\\\s/\\u000a\\u0009\\u0001\\u001f\\u0000é\"\n");
+  EXPECT_EQ(dump_json(Json(nasty)), "\"q\\\"b\\\\s/\\n\\t\\u0001\\u001f\\u0000é\"\n");
   Json doc;
   doc["a\"b"] = "x";
-  EXPECT_EQ(doc.dump(), "{\n  \"a\\\"b\": \"x\"\n}\n");
+  EXPECT_EQ(dump_json(doc), "{\n  \"a\\\"b\": \"x\"\n}\n");
+  // Bytes that are not UTF-8 do not stop the output.
+  EXPECT_EQ(dump_json(Json("a\xff" "b")), "\"a\xEF\xBF\xBD" "b\"\n");
 }
 
-TEST(JsonWriter, NestingMisuseThrows) {
-  Json number = 3;
-  EXPECT_THROW(number["key"], std::logic_error);
-  EXPECT_THROW(number.push_back(1), std::logic_error);
-  Json array = Json::array();
-  EXPECT_THROW(array["key"], std::logic_error);
-  Json object = Json::object();
-  EXPECT_THROW(object.push_back(1), std::logic_error);
-  EXPECT_THROW(Json(std::uint64_t{1} << 63), std::out_of_range);
-  EXPECT_NO_THROW(Json(std::uint64_t{1} << 62));
-}
-
-TEST(JsonWriter, DoublesRoundTripBitForBit) {
+// Every double written parses back to the same bits, and stays a double (never an integer).
+TEST(Json, DoublesRoundTripBitForBit) {
   for (const double value : awkward) {
-    std::string text = Json(value).dump();
+    std::string text = dump_json(Json(value));
     ASSERT_EQ(text.back(), '\n');
     text.pop_back();
     expect_same_bits(text, value);
+    const Json back = parse_json(text);
+    ASSERT_TRUE(back.is_number_float()) << text;
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(back.get<double>()), std::bit_cast<std::uint64_t>(value)) << text;
+    // As summary.csv shows it: the CSV form of the same double.
+    std::string csv;
+    append_number(csv, value);
+    EXPECT_EQ(compact_json(back), csv) << text;
   }
-  EXPECT_EQ(Json(-0.0).dump(), "-0\n");
-  EXPECT_EQ(Json(5e-324).dump(), "5e-324\n");
-  EXPECT_EQ(Json(1.7976931348623157e308).dump(), "1.7976931348623157e+308\n");
+  EXPECT_EQ(dump_json(Json(-0.0)), "-0.0\n");
+  EXPECT_EQ(dump_json(Json(5e-324)), "5e-324\n");
+  EXPECT_EQ(dump_json(Json(1.7976931348623157e308)), "1.7976931348623157e+308\n");
+}
+
+TEST(Json, ParsesInDocumentOrderWithCompactText) {
+  const Json v = parse_json(
+      R"( {"z": 1, "b": [true, false, null, -0.5e-3, 2.0], "c": {"d": "x\"\\\/\b\f\n\r\t\u00e9\ud83d\ude00"}, "e": 12345678901234567890} )");
+  ASSERT_TRUE(v.is_object());
+  std::vector<std::string> keys;
+  for (const auto& [key, value] : v.items()) keys.push_back(key);
+  EXPECT_EQ(keys, (std::vector<std::string>{"z", "b", "c", "e"}));
+  EXPECT_EQ(v["c"]["d"].get<std::string>(), "x\"\\/\b\f\n\r\t\xC3\xA9\xF0\x9F\x98\x80");
+  EXPECT_EQ(compact_json(v), R"({"z":1,"b":[true,false,null,-5e-04,2],"c":{"d":"x\"\\/\b\f\n\r\té😀"},"e":12345678901234567890})");
+  EXPECT_EQ(compact_json(parse_json(dump_json(v))), compact_json(v));
+  for (const char* bad : {"", "{", "[1,]", "{\"a\":1,}", "01", "1.", "-", "1e", "\"abc", "\"a\nb\"", "\"\\x\"",
+                          "\"\\ud800\"", "tru", "nul", "{} x", "{a:1}", "[1 2]", "'a'", "+1", ".5"})
+    EXPECT_THROW(parse_json(bad), JsonParseError) << bad;
+}
+
+TEST(Json, FileErrorsAreOneLineNamingTheFile) {
+  const fs::path dir = fs::temp_directory_path() / "ricochet_json_errors";
+  fs::create_directories(dir);
+  const fs::path bad = dir / "summary.json";
+  std::ofstream(bad) << "{\n  \"a\": tru\n}\n";
+  for (const fs::path& file : {bad, dir / "absent.json"}) {
+    try {
+      read_json_file(file);
+      ADD_FAILURE() << file;
+    } catch (const JsonParseError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(file.string() + ": ", 0), 0u) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+      EXPECT_NE(what.find(file == bad ? "parse error at line " : "cannot read"), std::string::npos) << what;
+    }
+  }
+  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------- CSV

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "harness/json_reader.hpp"
+#include "harness/json_io.hpp"
 #include "harness/reference_errors.hpp"
 
 using namespace ricochet;
@@ -50,7 +50,7 @@ const char* kRunSummary = R"({"status": "ok", "dt": 2e-3, "initial_energy": 10, 
 
 TEST(CompareWithReference, HistoryMetricsOfLinearHistoriesAreKnownExactly) {
   const HistoryTable ref = reference_history(), run = run_history();
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
   const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
   EXPECT_EQ(m.samples, 5u);
   // u - u_ref = (t, 0.5 t): largest at t = 2, |(2, 1)| = sqrt(5).
@@ -71,10 +71,10 @@ TEST(CompareWithReference, HistoryMetricsOfLinearHistoriesAreKnownExactly) {
 TEST(CompareWithReference, EnergyIsScaledByTheReferencesInitialEnergyElseItsFirstSample) {
   const HistoryTable ref = reference_history(), run = run_history();
   // initial_energy 20 J: the error halves.
-  const JsonValue twenty = parse_json(R"({"status": "ok", "initial_energy": 20})");
+  const Json twenty = parse_json(R"({"status": "ok", "initial_energy": 20})");
   EXPECT_DOUBLE_EQ(*compare_with_reference({nullptr, &run}, {&twenty, &ref}, "P").energy, 0.1);
   // No initial_energy: |E_total,ref| at its first sample, 10 J.
-  const JsonValue none = parse_json(R"({"status": "ok"})");
+  const Json none = parse_json(R"({"status": "ok"})");
   EXPECT_DOUBLE_EQ(*compare_with_reference({nullptr, &run}, {&none, &ref}, "P").energy, 0.2);
   // Both 0: an absolute error in J.
   HistoryTable zero = ref;
@@ -90,7 +90,7 @@ TEST(CompareWithReference, ImpulsesByTheTrapezoidRuleWhenTheSummariesLackThem) {
   EXPECT_FALSE(trapezoid_integral(run, "no_such_column"));
   EXPECT_EQ(*trapezoid_integral(HistoryTable{{"time", "f"}, {{1.0, 5.0}}}, "f"), 0.0);  // one sample: no interval
 
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
   const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
   EXPECT_EQ(m.impulse_source, "history");
   EXPECT_DOUBLE_EQ(*m.impulse_normal, 2.0);      // |8 - 10|
@@ -99,14 +99,14 @@ TEST(CompareWithReference, ImpulsesByTheTrapezoidRuleWhenTheSummariesLackThem) {
 
 TEST(CompareWithReference, ImpulsesFromTheSummariesWhenBothHaveThem) {
   const HistoryTable ref = reference_history(), run = run_history();
-  const JsonValue rs = parse_json(R"({"status": "ok", "contact_impulse_normal": 1.25, "contact_impulse_tangential": -0.5})");
-  const JsonValue s = parse_json(R"({"status": "ok", "contact_impulse_normal": 1.0, "contact_impulse_tangential": 0.25})");
+  const Json rs = parse_json(R"({"status": "ok", "contact_impulse_normal": 1.25, "contact_impulse_tangential": -0.5})");
+  const Json s = parse_json(R"({"status": "ok", "contact_impulse_normal": 1.0, "contact_impulse_tangential": 0.25})");
   const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
   EXPECT_EQ(m.impulse_source, "summary");
   EXPECT_DOUBLE_EQ(*m.impulse_normal, 0.25);
   EXPECT_DOUBLE_EQ(*m.impulse_tangential, 0.75);
   // One run without them: both from the histories, never one source against the other.
-  const JsonValue bare = parse_json(R"({"status": "ok"})");
+  const Json bare = parse_json(R"({"status": "ok"})");
   const ReferenceMetrics mixed = compare_with_reference({&bare, &run}, {&rs, &ref}, "P");
   EXPECT_EQ(mixed.impulse_source, "history");
   EXPECT_DOUBLE_EQ(*mixed.impulse_normal, 2.0);
@@ -118,7 +118,7 @@ TEST(CompareWithReference, ImpulsesFromTheSummariesWhenBothHaveThem) {
 }
 
 TEST(CompareWithReference, ScalarMetricsAreAbsoluteDifferencesOfTheSummaries) {
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
   const ReferenceMetrics m = compare_with_reference({&s, nullptr}, {&rs, nullptr}, "P");
   EXPECT_DOUBLE_EQ(*m.penetration, 3e-7);               // the run's own, not a difference
   EXPECT_DOUBLE_EQ(*m.rebound_velocity, 5.0);           // |(4, 2) - (1, -2)| = |(3, 4)|
@@ -134,17 +134,17 @@ TEST(CompareWithReference, ScalarMetricsAreAbsoluteDifferencesOfTheSummaries) {
 }
 
 TEST(CompareWithReference, ReboundVelocityFallsBackToMomentumOverMass) {
-  const JsonValue ref = parse_json(R"({"status": "ok", "rebound_velocity_x": 0.0, "rebound_velocity_y": 0.0})");
+  const Json ref = parse_json(R"({"status": "ok", "rebound_velocity_x": 0.0, "rebound_velocity_y": 0.0})");
   // (6, -8) kg m/s over 2 kg = (3, -4) m/s.
-  const JsonValue by_mass = parse_json(R"({"status": "ok", "total_mass": 2.0, "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
+  const Json by_mass = parse_json(R"({"status": "ok", "total_mass": 2.0, "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
   EXPECT_DOUBLE_EQ(*compare_with_reference({&by_mass, nullptr}, {&ref, nullptr}, "P").rebound_velocity, 5.0);
   // Without total_mass (or with a zero mass), and without the rebound keys: empty.
-  const JsonValue no_mass = parse_json(R"({"status": "ok", "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
+  const Json no_mass = parse_json(R"({"status": "ok", "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
   EXPECT_FALSE(compare_with_reference({&no_mass, nullptr}, {&ref, nullptr}, "P").rebound_velocity);
-  const JsonValue zero_mass = parse_json(R"({"status": "ok", "total_mass": 0, "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
+  const Json zero_mass = parse_json(R"({"status": "ok", "total_mass": 0, "final": {"momentum_x": 6.0, "momentum_y": -8.0}})");
   EXPECT_FALSE(compare_with_reference({&zero_mass, nullptr}, {&ref, nullptr}, "P").rebound_velocity);
   // Only one component: not a velocity.
-  const JsonValue half = parse_json(R"({"status": "ok", "rebound_velocity_x": 1.0})");
+  const Json half = parse_json(R"({"status": "ok", "rebound_velocity_x": 1.0})");
   EXPECT_FALSE(compare_with_reference({&half, nullptr}, {&ref, nullptr}, "P").rebound_velocity);
 }
 
@@ -155,9 +155,9 @@ TEST(CompareWithReference, MissingOrMistypedInputsLeaveMetricsEmpty) {
   EXPECT_EQ(none.impulse_source, "");
 
   // Keys of the wrong type, or null, count as absent.
-  const JsonValue odd = parse_json(R"({"status": "ok", "penetration_max": "deep", "final": null,
+  const Json odd = parse_json(R"({"status": "ok", "penetration_max": "deep", "final": null,
     "contact_duration": null, "von_mises_interior_max": [1], "rebound_velocity_x": true, "rebound_velocity_y": 1})");
-  const JsonValue rs = parse_json(kRefSummary);
+  const Json rs = parse_json(kRefSummary);
   const ReferenceMetrics m = compare_with_reference({&odd, nullptr}, {&rs, nullptr}, "P");
   for (const auto& [name, value] : metric_values(m, "P")) EXPECT_FALSE(value) << name;
 
@@ -170,8 +170,8 @@ TEST(CompareWithReference, MissingOrMistypedInputsLeaveMetricsEmpty) {
 
 TEST(CompareWithReference, DivergedRunsGetHistoryMetricsOnly) {
   const HistoryTable ref = reference_history(), run = run_history();
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
-  const JsonValue diverged = parse_json(R"({"status": "diverged", "penetration_max": 1, "contact_duration": 1,
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json diverged = parse_json(R"({"status": "diverged", "penetration_max": 1, "contact_duration": 1,
     "final": {"angular_momentum": 9}})");
   // A diverged run: its histories are compared up to where it stopped; nothing else.
   const ReferenceMetrics m = compare_with_reference({&diverged, &run}, {&rs, &ref}, "P");
@@ -192,7 +192,7 @@ TEST(CompareWithReference, NonFiniteDifferencesAreInfinite) {
   HistoryTable ref = reference_history(), run = run_history();
   run.rows[2][1] = std::numeric_limits<double>::quiet_NaN();  // P_ux at t = 1
   run.rows[3][4] = std::numeric_limits<double>::infinity();   // normal_force at t = 1.5
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
   const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
   EXPECT_EQ(*m.probe, std::numeric_limits<double>::infinity());
   EXPECT_EQ(*m.impulse_normal, std::numeric_limits<double>::infinity());
@@ -225,7 +225,7 @@ TEST(CompareWithReference, EnergyCountsThePenaltySpringEnergy) {
     const double t = 0.5 * i, held = i == 2 ? 1.5 : 0.25 * i * (4 - i) * 0.5;
     run.rows.push_back({t, 10.0 - held, held, t, 0.0});
   }
-  const JsonValue rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
+  const Json rs = parse_json(kRefSummary), s = parse_json(kRunSummary);
   const ReferenceMetrics m = compare_with_reference({&s, &run}, {&rs, &ref}, "P");
   ASSERT_TRUE(m.energy);
   EXPECT_NEAR(*m.energy, 0.0, 1e-15);

@@ -21,6 +21,7 @@
 #include <sys/wait.h>
 
 #include "harness/case_setup.hpp"
+#include "harness/cli.hpp"
 #include "harness/input_error.hpp"
 #include "harness/stability.hpp"
 #include "solver/tangent.hpp"
@@ -318,7 +319,7 @@ scale_factor = 1.0
   EXPECT_LT(stability_estimate(pc), de);
 }
 
-// The command line as the `ricochet` program runs it (harness/main.cpp wires the word).
+// The command line as the `ricochet` program runs it (harness/cli.cpp wires the word).
 TEST_F(StabilityTest, ProgramRunsTheCommand) {
   auto run = [](const std::string& args, std::string& output) {
     const std::string cmd = std::string(RICOCHET_BINARY) + " stability " + args + " 2>&1";

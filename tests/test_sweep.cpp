@@ -18,8 +18,9 @@
 
 #include <toml++/toml.h>
 
+#include "harness/cli.hpp"
 #include "harness/input_error.hpp"
-#include "harness/json_reader.hpp"
+#include "harness/json_io.hpp"
 #include "harness/reference_errors.hpp"
 #include "harness/sweep.hpp"
 #include "harness/sweep_spec.hpp"
@@ -424,36 +425,7 @@ TEST_F(SweepTest, CommandRejectsBadInputWithOneLineAndWritesNothing) {
   }
 }
 
-// ---- JSON reader and summary table ---------------------------------------------------------------
-
-TEST(JsonReader, ParsesDocumentsAndRejectsMalformedOnes) {
-  const JsonValue v = parse_json(
-      R"( {"a": 1, "b": [true, false, null, -0.5e-3], "c": {"d": "x\"\\\/\b\f\n\r\t\u00e9\ud83d\ude00"}, "e": 12345678901234567890} )");
-  ASSERT_TRUE(v.is_object());
-  EXPECT_EQ(v.find("a")->text, "1");
-  EXPECT_EQ(v.find("a")->number, 1.0);
-  ASSERT_EQ(v.find("b")->items.size(), 4u);
-  EXPECT_TRUE(v.find("b")->items[0].boolean);
-  EXPECT_TRUE(v.find("b")->items[2].is_null());
-  EXPECT_EQ(v.find("b")->items[3].number, -0.5e-3);
-  EXPECT_EQ(v.find("c")->find("d")->text, "x\"\\/\b\f\n\r\t\xC3\xA9\xF0\x9F\x98\x80");
-  EXPECT_EQ(v.find("e")->text, "12345678901234567890");
-  EXPECT_EQ(v.find("zz"), nullptr);
-  EXPECT_EQ(v.compact(), R"({"a":1,"b":[true,false,null,-0.5e-3],"c":{"d":"x\"\\/\b\f\n\r\té😀"},"e":12345678901234567890})");
-  EXPECT_EQ(parse_json(v.compact()).compact(), v.compact());
-  EXPECT_TRUE(parse_json("[]").is_array());
-  EXPECT_TRUE(parse_json("{}").is_object());
-  for (const char* bad : {"", "{", "[1,]", "{\"a\":1,}", "01", "1.", "-", "1e", "\"abc", "\"a\nb\"", "\"\\x\"",
-                          "\"\\ud800\"", "tru", "nul", "{} x", "{a:1}", "[1 2]", "'a'", "+1", ".5"})
-    EXPECT_THROW(parse_json(bad), JsonParseError) << bad;
-  EXPECT_THROW(parse_json(std::string(300, '[') + std::string(300, ']')), JsonParseError);
-  try {
-    parse_json("{\n  \"a\": tru\n}");
-    ADD_FAILURE();
-  } catch (const JsonParseError& e) {
-    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
-  }
-}
+// ---- summary table ---------------------------------------------------------------------------
 
 TEST(SummaryTable, UnionOfColumnsPlaceholdersAndNameClashes) {
   SummaryRow ok{"g/000", "g", "run", "ok", "", {{"scheme", "explicit"}, {"time.dt", "1e-5"}}, {}, {{"repeats", "1"}}};
@@ -529,10 +501,10 @@ cross = { "time.dt" = [1e-5, 2e-5], "bodies[0].element" = ["q4", "q4_hourglass"]
   EXPECT_EQ(t.rows[0].at("run_id"), "g/000-time.dt=1e-5_bodies.0.element=q4");  // rows in run order
 
   // sweep.json and each run's folder.
-  const JsonValue s = read_json_file(out() / "sweep.json");
-  EXPECT_EQ(s.find("sweep")->text, "four");
-  EXPECT_EQ(s.find("runs")->items.size(), 4u);
-  EXPECT_FALSE(s.find("finished_at")->is_null());
+  const Json s = read_json_file(out() / "sweep.json");
+  EXPECT_EQ(s.at("sweep").get<std::string>(), "four");
+  EXPECT_EQ(s.at("runs").size(), 4u);
+  EXPECT_FALSE(s.at("finished_at").is_null());
   const fs::path f = out() / "runs/g/003-time.dt=2e-5_bodies.0.element=q4_hourglass";
   for (const char* file : {"summary.json", "history.csv", "overrides.json", "stderr.txt"})
     EXPECT_TRUE(fs::exists(f / file)) << file;
@@ -609,12 +581,12 @@ cross = { "time.dt" = [1e-5, 2e-5] }
 
   // Each run records its own base: in sweep.json (the top-level `base` is the sweep's), in
   // overrides.json (what resume compares) and in summary.csv (`case_file`, from the run).
-  const JsonValue s = read_json_file(out() / "sweep.json");
-  EXPECT_EQ(s.find("base")->text, (dir_ / "case.toml").lexically_normal().string());
-  ASSERT_EQ(s.find("runs")->items.size(), 4u);
-  EXPECT_EQ(s.find("runs")->items[0].find("base")->text, (dir_ / "case.toml").lexically_normal().string());
-  EXPECT_EQ(s.find("runs")->items[3].find("base")->text, (dir_ / "other.toml").lexically_normal().string());
-  EXPECT_EQ(read_json_file(out() / "runs/own/001-time.dt=2e-5/overrides.json").find("base")->text,
+  const Json s = read_json_file(out() / "sweep.json");
+  EXPECT_EQ(s.at("base").get<std::string>(), (dir_ / "case.toml").lexically_normal().string());
+  ASSERT_EQ(s.at("runs").size(), 4u);
+  EXPECT_EQ(s.at("runs")[0].at("base").get<std::string>(), (dir_ / "case.toml").lexically_normal().string());
+  EXPECT_EQ(s.at("runs")[3].at("base").get<std::string>(), (dir_ / "other.toml").lexically_normal().string());
+  EXPECT_EQ(read_json_file(out() / "runs/own/001-time.dt=2e-5/overrides.json").at("base").get<std::string>(),
             (dir_ / "other.toml").lexically_normal().string());
   const Table t = read_table(out() / "summary.csv");
   EXPECT_EQ(t.row("top/001-time.dt=2e-5").at("case"), "tiny");
@@ -641,7 +613,7 @@ cross = { "time.dt" = [1e-5, 2e-5] }
 
   // Without a top-level base, sweep.json's `base` is null.
   ASSERT_EQ(run("[[group]]\nname = \"own\"\nbase = \"other.toml\"\ncross = { \"time.dt\" = [1e-5, 2e-5] }\n").resumed, 2u);
-  EXPECT_TRUE(read_json_file(out() / "sweep.json").find("base")->is_null());
+  EXPECT_TRUE(read_json_file(out() / "sweep.json").at("base").is_null());
 }
 
 TEST_F(SweepTest, DivergedAndFailedRunsAreRecordedAndTheSweepGoesOn) {
@@ -723,7 +695,7 @@ cross = { "time.dt" = [1e-5] }
   // The median is one of the three repeats' times.
   std::vector<double> walls;
   for (int k = 1; k <= 3; ++k)
-    walls.push_back(read_json_file(f / ("repeat-" + std::to_string(k)) / "summary.json").find("wall_seconds")->number);
+    walls.push_back(read_json_file(f / ("repeat-" + std::to_string(k)) / "summary.json").at("wall_seconds").get<double>());
   std::sort(walls.begin(), walls.end());
   EXPECT_DOUBLE_EQ(med, walls[1]);
   EXPECT_DOUBLE_EQ(lo, walls[0]);
@@ -900,15 +872,15 @@ TEST_F(SweepTest, BadSharedReferencesAreRejectedWithFileLineAndKey) {
 
 namespace {
 
-const JsonValue& at(const JsonValue& v, const std::string& key) {
-  const JsonValue* m = v.find(key);
-  if (!m) throw std::logic_error("no key " + key);
+const Json& at(const Json& v, const std::string& key) {
+  const auto m = v.find(key);
+  if (m == v.end()) throw std::logic_error("no key " + key);
   return *m;
 }
 
-const JsonValue* maybe(const JsonValue& v, const std::string& key) {
-  const JsonValue* m = v.find(key);
-  return m && m->is_number() ? m : nullptr;
+const Json* maybe(const Json& v, const std::string& key) {
+  const auto m = v.find(key);
+  return m != v.end() && m->is_number() ? &*m : nullptr;
 }
 
 double column_of(const HistoryTable& h, std::size_t row, const std::string& col) {
@@ -926,7 +898,7 @@ double trapezoid(const HistoryTable& h, const std::string& col) {
 
 // The run's outputs in DIR/runs/<id>.
 struct Outputs {
-  JsonValue summary;
+  Json summary;
   HistoryTable history;
 };
 Outputs outputs_of(const fs::path& out, const std::string& id) {
@@ -940,7 +912,7 @@ std::map<std::string, double> expected_errors(const Outputs& run, const Outputs&
   std::map<std::string, double> e;
   EXPECT_EQ(run.history.rows.size(), ref.history.rows.size());
   double du = 0.0, de = 0.0;
-  const double e0 = at(ref.summary, "initial_energy").number;
+  const double e0 = at(ref.summary, "initial_energy").get<double>();
   for (std::size_t i = 0; i < run.history.rows.size() && i < ref.history.rows.size(); ++i) {
     EXPECT_DOUBLE_EQ(column_of(run.history, i, "time"), column_of(ref.history, i, "time"));
     du = std::max(du, std::hypot(column_of(run.history, i, probe + "_ux") - column_of(ref.history, i, probe + "_ux"),
@@ -949,23 +921,23 @@ std::map<std::string, double> expected_errors(const Outputs& run, const Outputs&
   }
   e["probe_" + probe] = du;
   e["energy"] = de;
-  e["angular_momentum"] = std::abs(at(at(run.summary, "final"), "angular_momentum").number -
-                                   at(at(ref.summary, "final"), "angular_momentum").number);
+  e["angular_momentum"] = std::abs(at(at(run.summary, "final"), "angular_momentum").get<double>() -
+                                   at(at(ref.summary, "final"), "angular_momentum").get<double>());
   if (maybe(run.summary, "contact_impulse_normal") && maybe(ref.summary, "contact_impulse_normal") &&
       maybe(run.summary, "contact_impulse_tangential") && maybe(ref.summary, "contact_impulse_tangential")) {
-    e["impulse_normal"] = std::abs(at(run.summary, "contact_impulse_normal").number - at(ref.summary, "contact_impulse_normal").number);
+    e["impulse_normal"] = std::abs(at(run.summary, "contact_impulse_normal").get<double>() - at(ref.summary, "contact_impulse_normal").get<double>());
     e["impulse_tangential"] =
-        std::abs(at(run.summary, "contact_impulse_tangential").number - at(ref.summary, "contact_impulse_tangential").number);
+        std::abs(at(run.summary, "contact_impulse_tangential").get<double>() - at(ref.summary, "contact_impulse_tangential").get<double>());
   } else {
     e["impulse_normal"] = std::abs(trapezoid(run.history, "normal_force") - trapezoid(ref.history, "normal_force"));
     e["impulse_tangential"] = std::abs(trapezoid(run.history, "tangential_force") - trapezoid(ref.history, "tangential_force"));
   }
-  auto velocity = [](const JsonValue& s) -> std::optional<std::pair<double, double>> {
+  auto velocity = [](const Json& s) -> std::optional<std::pair<double, double>> {
     if (maybe(s, "rebound_velocity_x") && maybe(s, "rebound_velocity_y"))
-      return std::pair{at(s, "rebound_velocity_x").number, at(s, "rebound_velocity_y").number};
-    if (maybe(s, "total_mass") && at(s, "total_mass").number > 0.0)
-      return std::pair{at(at(s, "final"), "momentum_x").number / at(s, "total_mass").number,
-                       at(at(s, "final"), "momentum_y").number / at(s, "total_mass").number};
+      return std::pair{at(s, "rebound_velocity_x").get<double>(), at(s, "rebound_velocity_y").get<double>()};
+    if (maybe(s, "total_mass") && at(s, "total_mass").get<double>() > 0.0)
+      return std::pair{at(at(s, "final"), "momentum_x").get<double>() / at(s, "total_mass").get<double>(),
+                       at(at(s, "final"), "momentum_y").get<double>() / at(s, "total_mass").get<double>()};
     return std::nullopt;
   };
   if (const auto a = velocity(run.summary), b = velocity(ref.summary); a && b)
@@ -975,7 +947,7 @@ std::map<std::string, double> expected_errors(const Outputs& run, const Outputs&
            {"von_mises_interior", "von_mises_interior_max"},
            {"von_mises_interior_time", "von_mises_interior_max_time"}})
     if (maybe(run.summary, key) && maybe(ref.summary, key))
-      e[metric] = std::abs(at(run.summary, key).number - at(ref.summary, key).number);
+      e[metric] = std::abs(at(run.summary, key).get<double>() - at(ref.summary, key).get<double>());
   return e;
 }
 
@@ -1090,20 +1062,20 @@ reference = false
     EXPECT_EQ(alone.at(c), "") << c;
 
   // sweep.json: the reference, its check run and its floor; each run's reference kind.
-  const JsonValue s = read_json_file(out() / "sweep.json");
-  const JsonValue& sr = at(s, "reference");
-  EXPECT_EQ(at(sr, "id").text, "reference/converged");
-  EXPECT_EQ(at(sr, "name").text, "converged");
-  EXPECT_EQ(at(sr, "error_probe").text, "top_right");
-  EXPECT_EQ(at(at(sr, "check"), "id").text, "reference/converged-check");
-  EXPECT_EQ(at(at(sr, "floor"), "impulse_source").text, source);
+  const Json s = read_json_file(out() / "sweep.json");
+  const Json& sr = at(s, "reference");
+  EXPECT_EQ(at(sr, "id").get<std::string>(), "reference/converged");
+  EXPECT_EQ(at(sr, "name").get<std::string>(), "converged");
+  EXPECT_EQ(at(sr, "error_probe").get<std::string>(), "top_right");
+  EXPECT_EQ(at(at(sr, "check"), "id").get<std::string>(), "reference/converged-check");
+  EXPECT_EQ(at(at(sr, "floor"), "impulse_source").get<std::string>(), source);
   for (const auto& m : {"probe_top_right", "energy", "angular_momentum", "impulse_normal"})
-    EXPECT_DOUBLE_EQ(at(at(sr, "floor"), m).number, floor.at(m)) << m;
-  const auto& list = at(s, "runs").items;
+    EXPECT_DOUBLE_EQ(at(at(sr, "floor"), m).get<double>(), floor.at(m)) << m;
+  const Json& list = at(s, "runs");
   ASSERT_EQ(list.size(), 7u);
-  EXPECT_EQ(at(list[2], "reference_kind").text, "shared");
-  EXPECT_EQ(at(list[5], "id").text, "conv/000-time.dt=1e-5");
-  EXPECT_EQ(at(list[5], "reference_kind").text, "group");
+  EXPECT_EQ(at(list[2], "reference_kind").get<std::string>(), "shared");
+  EXPECT_EQ(at(list[5], "id").get<std::string>(), "conv/000-time.dt=1e-5");
+  EXPECT_EQ(at(list[5], "reference_kind").get<std::string>(), "group");
   EXPECT_TRUE(at(list[6], "reference_kind").is_null());
 
   // A changed reference: only the reference and its check run again; the runs compared with it
@@ -1115,7 +1087,7 @@ reference = false
   EXPECT_EQ(again.resumed, 5u);
   const Table t2 = read_table(out() / "summary.csv");
   const Outputs ref2 = outputs_of(out(), "reference/converged"), check2 = outputs_of(out(), "reference/converged-check");
-  EXPECT_EQ(at(ref2.summary, "dt").number, 2e-6);
+  EXPECT_EQ(at(ref2.summary, "dt").get<double>(), 2e-6);
   const auto& semi = t2.row("semi/000-time.dt=1e-5");
   EXPECT_EQ(semi.at("reference_dt"), "2e-06");
   expect_metrics(semi, "error_", expected_errors(outputs_of(out(), "semi/000-time.dt=1e-5"), ref2, "top_right"), floored);
@@ -1130,7 +1102,7 @@ reference = false
   EXPECT_EQ(third.resumed, 6u);
   const Table t3 = read_table(out() / "summary.csv");
   const Outputs check3 = outputs_of(out(), "reference/converged-check");
-  EXPECT_EQ(at(check3.summary, "dt").number, 1e-6);
+  EXPECT_EQ(at(check3.summary, "dt").get<double>(), 1e-6);
   const std::map<std::string, double> floor3 = expected_errors(check3, ref2, "top_right");
   for (const char* id : {"reference/converged-check", "semi/000-time.dt=1e-5", "semi/001-time.dt=5e-6"})
     expect_metrics(t3.row(id), "floor_", floor3, floored);
