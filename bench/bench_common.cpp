@@ -5,7 +5,7 @@
 #include <numbers>
 #include <optional>
 
-#include "harness/mesh_generators.hpp"
+#include "harness/input/mesh_generators.hpp"
 
 namespace ricochet::bench {
 namespace {

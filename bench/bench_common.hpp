@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "solver/model.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet::bench {
 

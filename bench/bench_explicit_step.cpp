@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "bench/bench_common.hpp"
-#include "solver/central_difference.hpp"
+#include "solver/schemes/central_difference.hpp"
 
 namespace ricochet::bench {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "bench_common.hpp"
-#include "harness/case_setup.hpp"
+#include "harness/input/case_setup.hpp"
 
 namespace ricochet::bench {
 namespace {

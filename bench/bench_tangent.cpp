@@ -13,9 +13,9 @@
 #include <string>
 
 #include "bench/bench_common.hpp"
-#include "harness/mesh_generators.hpp"
-#include "solver/internal_forces.hpp"
-#include "solver/tangent.hpp"
+#include "harness/input/mesh_generators.hpp"
+#include "solver/elements/internal_forces.hpp"
+#include "solver/elements/tangent.hpp"
 
 namespace ricochet::bench {
 namespace {

@@ -1,4 +1,4 @@
-// Contact between deformable bodies, node to segment (solver/body_contact.hpp), in the three
+// Contact between deformable bodies, node to segment (solver/contact/body_contact.hpp), in the three
 // schemes: the segment choice, momentum conservation to round-off (the contact forces between
 // two bodies sum to zero), frictional sliding across many master segments, and no allocation
 // in a step.
@@ -7,14 +7,14 @@
 #include <cmath>
 #include <vector>
 
-#include "harness/case_setup.hpp"
-#include "harness/case_spec.hpp"
-#include "harness/input_error.hpp"
-#include "harness/mesh_generators.hpp"
-#include "solver/implicit.hpp"
-#include "solver/bipotential_contact.hpp"
-#include "solver/penalty_contact.hpp"
-#include "solver/run.hpp"
+#include "harness/input/case_setup.hpp"
+#include "harness/input/case_spec.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/input/mesh_generators.hpp"
+#include "solver/schemes/implicit.hpp"
+#include "solver/contact/bipotential_contact.hpp"
+#include "solver/contact/penalty_contact.hpp"
+#include "solver/schemes/explicit.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.
 #include "alloc_counter.hpp"
 
@@ -125,7 +125,7 @@ TEST(BodyContact, SegmentChoice) {
   EXPECT_NEAR(moved.gap, -1e-4, 1e-15);
 }
 
-// Vertex contact (solver/body_contact.hpp): a node that moves diagonally from the wedge of a
+// Vertex contact (solver/contact/body_contact.hpp): a node that moves diagonally from the wedge of a
 // convex corner into the body within one step would find no face at the start of the step;
 // a node pressed into a concave corner ends up in that corner's wedge inside the body, where
 // no face contains its projection either.

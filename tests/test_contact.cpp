@@ -1,4 +1,4 @@
-// Verification of the frictional contact phase (solver/coulomb.hpp, solver/contact): the
+// Verification of the frictional contact phase (solver/contact/coulomb.hpp, solver/contact): the
 // projection onto the Coulomb cone against its closed form, the fixed points and convergence
 // rate of the bi-potential predictor-corrector (Cros et al. 2010, Eq. (5); docs/background.md,
 // Projection on the Coulomb cone, The predictor-corrector, Convergence of the iteration), the
@@ -14,10 +14,10 @@
 #include <random>
 #include <vector>
 
-#include "solver/bipotential_contact.hpp"
-#include "solver/coulomb.hpp"
-#include "solver/observers.hpp"
-#include "solver/run.hpp"
+#include "solver/contact/bipotential_contact.hpp"
+#include "solver/contact/coulomb.hpp"
+#include "solver/observers/observers.hpp"
+#include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 
 namespace ricochet {

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "solver/observers.hpp"
-#include "solver/run.hpp"
+#include "solver/observers/observers.hpp"
+#include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 
 namespace ricochet {
@@ -438,7 +438,7 @@ TEST(Explicit, InvertedElementIsDetected) {
 }
 
 TEST(Explicit, HistoryLayout) {
-  // Column names and order as documented in run.hpp, one row per sample step (k * interval
+  // Column names and order as defined by history_fields() (solver/observers/run_monitor.cpp), one row per sample step (k * interval
   // rounded to a step, plus the last step), probe columns equal to the probed node's state
   // from an independent evaluate/update loop (same arithmetic, so equal to a few ulps).
   const std::vector<std::string> fixed = {

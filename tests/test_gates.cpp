@@ -1,4 +1,4 @@
-// Gates (harness/gates.hpp) on hand-written sweep tables, and the CSV reader they use.
+// Gates (harness/gates/gates.hpp) on hand-written sweep tables, and the CSV reader they use.
 // Every gate kind is shown to pass and to fail: a gate that cannot fail is a defect.
 #include <gtest/gtest.h>
 
@@ -13,10 +13,10 @@
 #include <unistd.h>
 #include <vector>
 
-#include "harness/csv_reader.hpp"
-#include "harness/gates.hpp"
-#include "harness/cli.hpp"
-#include "harness/input_error.hpp"
+#include "harness/outputs/csv_reader.hpp"
+#include "harness/gates/gates.hpp"
+#include "harness/cli/cli.hpp"
+#include "harness/input/input_error.hpp"
 
 namespace ricochet {
 namespace {

@@ -1,4 +1,4 @@
-// Tests of the Gmsh .msh reader (harness/gmsh_reader.hpp) on the files in tests/data and on
+// Tests of the Gmsh .msh reader (harness/input/gmsh_reader.hpp) on the files in tests/data and on
 // malformed files written to a temporary directory: every rejection names file and line.
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <sstream>
 #include <string>
 
-#include "harness/gmsh_reader.hpp"
-#include "harness/input_error.hpp"
+#include "harness/input/gmsh_reader.hpp"
+#include "harness/input/input_error.hpp"
 
 namespace ricochet {
 namespace {

@@ -1,4 +1,4 @@
-// Verification of the Blatz-Ko and compressible Mooney-Rivlin laws (solver/material.hpp), in
+// Verification of the Blatz-Ko and compressible Mooney-Rivlin laws (solver/materials/material.hpp), in
 // plane strain and plane stress: P = dW/dF and A = dP/dF against central differences, the
 // stress-free reference state, objectivity, the small-strain limit (linear elasticity with the
 // law's mu and lambda), the plane-stress elimination S33 = 0 checked with the 3D laws written
@@ -19,9 +19,9 @@
 
 #include <unistd.h>
 
-#include "harness/case_setup.hpp"
-#include "harness/input_error.hpp"
-#include "solver/material.hpp"
+#include "harness/input/case_setup.hpp"
+#include "harness/input/input_error.hpp"
+#include "solver/materials/material.hpp"
 
 namespace ricochet {
 namespace {
@@ -240,7 +240,7 @@ TEST(Hyperelastic, SmallStrainLimitIsLinearElasticity) {
   }
 }
 
-// The 3D laws with C = diag(F^T F, C33), written out independently of solver/material.cpp.
+// The 3D laws with C = diag(F^T F, C33), written out independently of solver/materials/material.cpp.
 struct ThreeD {
   double w, s33, s33_scale;
 };

@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "solver/implicit.hpp"
-#include "solver/run.hpp"
+#include "solver/schemes/implicit.hpp"
+#include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 
 namespace ricochet {

@@ -1,4 +1,4 @@
-// Verification of the hyperelastic materials (solver/material.hpp): P = dW/dF, stress-free
+// Verification of the hyperelastic materials (solver/materials/material.hpp): P = dW/dF, stress-free
 // reference state, objectivity, the small-strain limit, the plane-stress elimination of S33,
 // wave speeds and the von Mises equivalent stress.
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/material.hpp"
+#include "solver/materials/material.hpp"
 
 namespace ricochet {
 namespace {

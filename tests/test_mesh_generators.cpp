@@ -1,4 +1,4 @@
-// Tests of the structured mesh generators (harness/mesh_generators.hpp): counts, exact areas
+// Tests of the structured mesh generators (harness/input/mesh_generators.hpp): counts, exact areas
 // and their convergence, orientation, cell quality, node sets, grading, and rejected
 // parameters.
 #include <gtest/gtest.h>
@@ -11,9 +11,9 @@
 #include <string>
 #include <utility>
 
-#include "harness/input_error.hpp"
-#include "harness/mesh_generators.hpp"
-#include "solver/model.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/input/mesh_generators.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 namespace {

@@ -17,8 +17,8 @@
 #include <new>
 #include <vector>
 
-#include "solver/central_difference.hpp"
-#include "solver/observers.hpp"
+#include "solver/schemes/central_difference.hpp"
+#include "solver/observers/observers.hpp"
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"

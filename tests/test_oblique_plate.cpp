@@ -16,9 +16,9 @@
 #include <utility>
 #include <vector>
 
-#include "harness/case_setup.hpp"
-#include "harness/case_spec.hpp"
-#include "solver/run.hpp"
+#include "harness/input/case_setup.hpp"
+#include "harness/input/case_spec.hpp"
+#include "solver/schemes/explicit.hpp"
 
 namespace ricochet {
 namespace {

@@ -8,10 +8,10 @@
 #include <stdexcept>
 #include <vector>
 
-#include "solver/obstacle.hpp"
-#include "solver/penalty_contact.hpp"
-#include "solver/implicit.hpp"
-#include "solver/run.hpp"
+#include "solver/contact/obstacle.hpp"
+#include "solver/contact/penalty_contact.hpp"
+#include "solver/schemes/implicit.hpp"
+#include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 
 using namespace ricochet;

@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "harness/atomic_file.hpp"
-#include "harness/csv_writer.hpp"
-#include "harness/json_io.hpp"
-#include "harness/vtu_writer.hpp"
+#include "harness/outputs/atomic_file.hpp"
+#include "harness/outputs/csv_writer.hpp"
+#include "harness/outputs/json_io.hpp"
+#include "harness/outputs/vtu_writer.hpp"
 
 namespace ricochet {
 namespace {

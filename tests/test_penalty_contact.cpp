@@ -18,8 +18,8 @@
 #include <new>
 #include <vector>
 
-#include "solver/observers.hpp"
-#include "solver/penalty_contact.hpp"
+#include "solver/observers/observers.hpp"
+#include "solver/contact/penalty_contact.hpp"
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <string>
 
-#include "harness/case_setup.hpp"
+#include "harness/input/case_setup.hpp"
 
 namespace ricochet {
 namespace {

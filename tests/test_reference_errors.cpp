@@ -1,4 +1,4 @@
-// A run's errors against its reference (harness/reference_errors.hpp, docs/sweeps.md "Accuracy
+// A run's errors against its reference (harness/sweeps/reference_errors.hpp, docs/sweeps.md "Accuracy
 // against cost"), on synthetic summaries and histories whose answers are known exactly: linear
 // displacement histories, force histories whose trapezoid integrals are sums of triangles, and
 // scalar summary keys. Missing or mistyped inputs leave a metric empty.
@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "harness/json_io.hpp"
-#include "harness/reference_errors.hpp"
+#include "harness/outputs/json_io.hpp"
+#include "harness/sweeps/reference_errors.hpp"
 
 using namespace ricochet;
 

@@ -1,4 +1,4 @@
-// The implicit scheme's sparse LDL^T (solver/sparse_ldlt.hpp): solutions against a dense
+// The implicit scheme's sparse LDL^T (solver/linear/sparse_ldlt.hpp): solutions against a dense
 // factorization, the fill against Eigen's SimplicialLDLT with the same AMD ordering, the
 // indefinite-matrix report and a clean retry after it, and no allocation after analyze().
 #include <gtest/gtest.h>
@@ -8,8 +8,8 @@
 #include <cmath>
 #include <vector>
 
-#include "solver/sparse_ldlt.hpp"
-#include "solver/tangent.hpp"
+#include "solver/linear/sparse_ldlt.hpp"
+#include "solver/elements/tangent.hpp"
 #include "verification_meshes.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.
 #include "alloc_counter.hpp"

@@ -1,4 +1,4 @@
-// The stability search (harness/stability.hpp, docs/stability.md): on a small explicit case the
+// The stability search (harness/stability/stability.hpp, docs/stability.md): on a small explicit case the
 // bracket [lo, hi] contains the true linear limit 2 / omega_max, computed here independently
 // from the eigenvalues of M^-1 K on the free DOFs; the bisection converges to the tolerance and
 // respects --max-runs; the implicit scheme reports no instability up to the cap; the command
@@ -20,11 +20,11 @@
 
 #include <sys/wait.h>
 
-#include "harness/case_setup.hpp"
-#include "harness/cli.hpp"
-#include "harness/input_error.hpp"
-#include "harness/stability.hpp"
-#include "solver/tangent.hpp"
+#include "harness/input/case_setup.hpp"
+#include "harness/cli/cli.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/stability/stability.hpp"
+#include "solver/elements/tangent.hpp"
 
 namespace fs = std::filesystem;
 
@@ -319,7 +319,7 @@ scale_factor = 1.0
   EXPECT_LT(stability_estimate(pc), de);
 }
 
-// The command line as the `ricochet` program runs it (harness/cli.cpp wires the word).
+// The command line as the `ricochet` program runs it (harness/cli/cli.cpp wires the word).
 TEST_F(StabilityTest, ProgramRunsTheCommand) {
   auto run = [](const std::string& args, std::string& output) {
     const std::string cmd = std::string(RICOCHET_BINARY) + " stability " + args + " 2>&1";

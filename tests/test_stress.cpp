@@ -1,4 +1,4 @@
-// Stress measures and the per-step stress peaks (solver/stress.hpp, internal_forces.hpp):
+// Stress measures and the per-step stress peaks (solver/materials/stress.hpp, internal_forces.hpp):
 // the three von Mises equivalents against closed forms, the upper bound that lets points skip,
 // the force pass's peaks against a separate stress pass, and von_mises_max on the oblique
 // plate independent of the history sampling interval.
@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "harness/case_setup.hpp"
-#include "harness/case_spec.hpp"
-#include "solver/internal_forces.hpp"
-#include "solver/run.hpp"
-#include "solver/stress.hpp"
+#include "harness/input/case_setup.hpp"
+#include "harness/input/case_spec.hpp"
+#include "solver/elements/internal_forces.hpp"
+#include "solver/schemes/explicit.hpp"
+#include "solver/materials/stress.hpp"
 
 namespace ricochet {
 namespace {

@@ -18,12 +18,12 @@
 
 #include <toml++/toml.h>
 
-#include "harness/cli.hpp"
-#include "harness/input_error.hpp"
-#include "harness/json_io.hpp"
-#include "harness/reference_errors.hpp"
-#include "harness/sweep.hpp"
-#include "harness/sweep_spec.hpp"
+#include "harness/cli/cli.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/outputs/json_io.hpp"
+#include "harness/sweeps/reference_errors.hpp"
+#include "harness/sweeps/sweep.hpp"
+#include "harness/sweeps/sweep_spec.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -906,7 +906,7 @@ Outputs outputs_of(const fs::path& out, const std::string& id) {
 }
 
 // The metrics of `run` against `ref` computed here from the two runs' files, independently of
-// harness/reference_errors.cpp, for runs sampled at the same times: name -> value, or absent
+// harness/sweeps/reference_errors.cpp, for runs sampled at the same times: name -> value, or absent
 // when an input is missing.
 std::map<std::string, double> expected_errors(const Outputs& run, const Outputs& ref, const std::string& probe) {
   std::map<std::string, double> e;

@@ -25,8 +25,8 @@
 #include <utility>
 #include <vector>
 
-#include "solver/internal_forces.hpp"
-#include "solver/tangent.hpp"
+#include "solver/elements/internal_forces.hpp"
+#include "solver/elements/tangent.hpp"
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"

@@ -1,0 +1,261 @@
+#include "harness/cli/cli.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <stdexcept>
+
+#include "harness/cli/cli_help.hpp"
+#include "harness/cli/commands.hpp"
+#include "harness/gates/gates.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/stability/stability.hpp"
+#include "harness/sweeps/sweep.hpp"
+
+namespace ricochet {
+namespace {
+
+constexpr const char* kAllowed = "run, sweep, check, stability, report, plot, --version, --help";
+
+// ---- values ----------------------------------------------------------------------------------
+
+long parse_count(const std::string& flag, const std::string& v, long hi) {
+  char* end = nullptr;
+  errno = 0;
+  const long x = std::strtol(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || errno != 0 || x < 1 || x > hi)
+    throw InputError("ricochet sweep: " + flag + ": expected an integer in [1, " + std::to_string(hi) + "]; got '" + v + "'");
+  return x;
+}
+
+double parse_number(const std::string& flag, const std::string& text, const char* expected) {
+  double v = 0.0;
+  std::size_t used = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v))
+    throw InputError("ricochet stability: " + flag + ": expected " + expected + "; got \"" + text + "\"");
+  return v;
+}
+
+// ---- the command line --------------------------------------------------------------------------
+
+class CommandLine {
+ public:
+  CommandLine() {
+    app_.formatter(help_formatter());
+    app_.set_help_flag("-h,--help", "this text");
+    app_.set_version_flag("--version", std::string("ricochet ") + RICOCHET_VERSION, "print the version and exit");
+    app_.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // --out A --out B: B
+    app_.require_subcommand(0, 1);
+    app_.allow_extras();
+
+    run_ = command("run", "run a case (docs/case-format.md); writes DIR/summary.json, DIR/history.csv, DIR/fields/*.vtu",
+                   "exit status: 0 ok, 3 diverged (outputs written), 2 bad input (nothing written), 1 other error");
+    run_->add_option("CASE.toml", run_cmd_.case_file, "the case file");
+    sets(run_, run_cmd_.sets, "override a case key, e.g. --set time.dt=1e-6 --set mesh=M2 (repeatable)");
+    run_->add_option("--out", run_cmd_.out_dir, "output folder (default: results/<case name>)")->type_name("DIR");
+    run_->add_flag("-q,--quiet", run_cmd_.quiet, "no progress and no summary line");
+
+    sweep_ = command("sweep", "run every case of a sweep file (docs/sweeps.md); writes DIR/summary.csv, DIR/sweep.json, DIR/runs/",
+                     "exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 2 bad input, 1 other error");
+    sweep_->add_option("SWEEP.toml", sweep_cmd_.file, "the sweep file");
+    sweep_->add_option("--out", out_dir_, "output folder (default: results/<sweep name>)")->type_name("DIR");
+    jobs_ = sweep_->add_option("-j,--jobs", jobs_text_,
+                               "runs at the same time, 1 ... " + std::to_string(kMaxSweepJobs) +
+                                   " (default 1: one at a time, for clean timings)")
+                ->type_name("N");
+    repeat_ = sweep_->add_option("--repeat", repeat_text_,
+                                 "run each case K times, 1 ... 1000; summary.csv gets the median and the spread of the timings")
+                  ->type_name("K");
+    sweep_->add_option("--check", sweep_cmd_.gates_file,
+                       "then check the gates of GATES.toml on DIR/summary.csv (docs/gates.md); exit 4 if one fails")
+        ->type_name("GATES.toml");
+    sweep_->add_flag("--force", sweep_cmd_.options.force, "rerun the runs that an earlier sweep finished");
+    sweep_->add_flag("-q,--quiet", sweep_cmd_.options.quiet, "no progress lines");
+
+    check_ = command("check", "check the gates of GATES.toml (docs/gates.md) on the sweep table SUMMARY.csv",
+                     "exit status: 0 all gates pass, 4 a gate failed, 2 bad input, 1 other error");
+    check_->add_option("SUMMARY.csv", check_cmd_.summary_csv, "a sweep's summary.csv");
+    check_->add_option("GATES.toml", check_cmd_.gates_toml, "the gate file");
+    junit_ = check_->add_option("--junit", check_cmd_.junit, "JUnit XML report (default: gates-junit.xml next to SUMMARY.csv)")
+                 ->type_name("FILE");
+
+    stability_ = command("stability",
+                         "the largest stable time step of the case's scheme on its mesh, by bisection over runs (docs/stability.md)",
+                         "exit status: 0 bracket found, 5 no unstable dt up to the cap, 4 no bracket, 2 bad input, 1 other error");
+    stability_->add_option("CASE.toml", stability_cmd_.case_file, "the case file");
+    sets(stability_, stability_cmd_.sets, "override a case key (as for `ricochet run`; repeatable)");
+    stability_->add_option("--out", stability_cmd_.out_dir,
+                           "write DIR/stability.json and each trial's DIR/trials/NN/summary.json, history.csv")
+        ->type_name("DIR");
+    tolerance_ = stability_->add_option("--tolerance", tolerance_text_, "stop when hi/lo - 1 <= REL (default 0.01)")->type_name("REL");
+    max_runs_ = stability_->add_option("--max-runs", max_runs_text_, "at most N trial runs (default 30)")->type_name("N");
+    end_ = stability_->add_option("--end", end_text_, "time.end of every trial [s] (default: the case's)")->type_name("TIME");
+    energy_bound_ = stability_->add_option("--energy-bound", energy_bound_text_,
+                                           "a stable run keeps energy_error_max <= E (default 0.1)")
+                        ->type_name("E");
+    stability_->add_flag("-q,--quiet", stability_cmd_.quiet, "no per-trial lines on stderr");
+
+    // report and plot: every word after the command goes to the script, --help included.
+    for (const Script& s : scripts()) command(s.command, s.description, s.footer)->prefix_command()->set_help_flag();
+
+    help_ = app_.add_subcommand("help", "the complete usage")->group("")->allow_extras();  // as --help
+  }
+
+  int main(const std::vector<std::string>& args, std::ostream& out) {
+    std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+    try {
+      app_.parse(reversed);
+    } catch (const CLI::CallForHelp&) {
+      out << app_.help();
+      return 0;
+    } catch (const CLI::CallForAllHelp&) {
+      out << app_.help();
+      return 0;
+    } catch (const CLI::CallForVersion& e) {
+      out << e.what() << '\n';
+      return 0;
+    } catch (const CLI::ParseError& e) {
+      throw InputError(message(e));
+    }
+    const std::vector<CLI::App*> chosen = app_.get_subcommands();
+    if (chosen.empty()) {
+      const std::vector<std::string> extra = app_.remaining();
+      if (extra.empty()) throw InputError("missing command; allowed: " + std::string(kAllowed));
+      const bool option = extra[0].size() > 1 && extra[0][0] == '-';
+      throw InputError(std::string(option ? "unknown option '" : "unknown command '") + extra[0] + "'; allowed: " + kAllowed);
+    }
+    CLI::App& c = *chosen.front();
+    if (&c == help_) {
+      out << complete_usage(app_);
+      return 0;
+    }
+    if (const Script* s = script_of(c)) run_script(s->file, c.remaining());
+    check_arguments(c, app_.remaining());
+
+    if (&c == run_) return run_command(run_cmd_);
+    if (&c == sweep_) {
+      if (jobs_->count()) sweep_cmd_.options.jobs = static_cast<int>(parse_count("--jobs", jobs_text_, kMaxSweepJobs));
+      if (repeat_->count()) sweep_cmd_.options.repeat = static_cast<int>(parse_count("--repeat", repeat_text_, 1000));
+      sweep_cmd_.options.out_dir = out_dir_;
+      return run_command(sweep_cmd_, out);
+    }
+    if (&c == check_) {
+      if (junit_->count() && check_cmd_.junit.empty()) throw InputError("ricochet check: --junit needs a non-empty file name");
+      return run_command(check_cmd_, out);
+    }
+    StabilityOptions& opt = stability_cmd_.options;
+    if (tolerance_->count()) opt.tolerance = parse_number("--tolerance", tolerance_text_, "a number in (0, 10]");
+    if (energy_bound_->count()) opt.energy_bound = parse_number("--energy-bound", energy_bound_text_, "a number > 0");
+    if (end_->count()) opt.end_time = parse_number("--end", end_text_, "a time > 0 [s]");
+    if (max_runs_->count()) {
+      const double n = parse_number("--max-runs", max_runs_text_, "an integer in 1 ... 10000");
+      if (n != std::floor(n) || n < 1 || n > 10000)
+        throw InputError("ricochet stability: --max-runs: expected an integer in 1 ... 10000; got \"" + max_runs_text_ + "\"");
+      opt.max_runs = static_cast<int>(n);
+    }
+    return run_command(stability_cmd_);
+  }
+
+ private:
+  CLI::App* command(const std::string& name, const std::string& description, const std::string& footer) {
+    CLI::App* c = app_.add_subcommand(name, description);
+    c->footer(footer);
+    c->allow_extras();  // unknown options and extra words: reported by check_arguments, in one line
+    return c;
+  }
+
+  static void sets(CLI::App* c, std::vector<std::string>& into, const std::string& help) {
+    c->add_option("--set", into, help)->type_name("KEY=VALUE")->expected(1)->take_all();
+  }
+
+  // The words CLI11 left over (`after_dashes`: those after "--" that no positional took): an
+  // unknown option, or more files than the command takes; then a missing file.
+  static void check_arguments(const CLI::App& c, std::vector<std::string> after_dashes) {
+    const std::string prefix = "ricochet " + c.get_name() + ": ";
+    std::vector<std::string> words;
+    for (const std::string& w : c.remaining()) {
+      if (w.size() > 1 && w[0] == '-') {
+        std::string allowed;
+        for (const CLI::Option* o : ordered_options(c))
+          if (!o->get_positional()) allowed += (allowed.empty() ? "" : ", ") + long_name(o);
+        throw InputError(prefix + "unknown option '" + w + "'; allowed: " + allowed);
+      }
+      words.push_back(w);
+    }
+    words.insert(words.end(), after_dashes.begin(), after_dashes.end());
+    std::vector<std::string> names, given;
+    for (const CLI::Option* o : c.get_options([](const CLI::Option* o) { return o->get_positional(); })) {
+      names.push_back(o->get_name(true, false));
+      if (o->count()) given.push_back(o->as<std::string>());
+    }
+    if (given.size() == names.size() && words.empty()) return;
+    given.insert(given.end(), words.begin(), words.end());
+    if (names.size() == 1 && given.empty()) throw InputError(prefix + "missing " + names[0] + "; usage: " + synopsis(c));
+    if (names.size() == 1)
+      throw InputError(prefix + "more than one " + names[0] + " ('" + given[0] + "', '" + given[1] + "')");
+    std::string expected;
+    for (std::size_t i = 0; i < names.size(); ++i) expected += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+    throw InputError(prefix + "expected " + expected + "; got " + std::to_string(given.size()) +
+                     " file argument(s); usage: " + synopsis(c));
+  }
+
+  // A CLI11 parse error as one line naming the command: "--out needs a value" for a missing value.
+  std::string message(const CLI::ParseError& e) const {
+    const std::vector<CLI::App*> chosen = app_.get_subcommands();
+    const std::string prefix = chosen.empty() ? "" : "ricochet " + chosen.front()->get_name() + ": ";
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && what.rfind("-", 0) == 0 && what.find(" required ") != std::string::npos)
+      return prefix + what.substr(0, what.find(':')) + " needs a value";
+    return prefix + what;
+  }
+
+  CLI::App app_{std::string("ricochet ") + RICOCHET_VERSION +
+                    ": a verification and benchmark harness for frictional impact simulation",
+                "ricochet"};
+  CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
+  CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr;
+  CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
+  RunCommand run_cmd_;
+  SweepCommand sweep_cmd_;
+  CheckCommand check_cmd_;
+  StabilityCommand stability_cmd_;
+  std::string out_dir_;  // sweep --out
+  std::string jobs_text_, repeat_text_, tolerance_text_, max_runs_text_, end_text_, energy_bound_text_;
+};
+
+}  // namespace
+
+int ricochet_main(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  return command_status(err, [&]() -> int {
+    CommandLine cli;
+    return cli.main(args, out);
+  });
+}
+
+int sweep_command(const std::vector<std::string>& args) {
+  std::vector<std::string> a = {"sweep"};
+  a.insert(a.end(), args.begin(), args.end());
+  return ricochet_main(a, std::cout, std::cerr);
+}
+
+int stability_command(const std::vector<std::string>& args) {
+  std::vector<std::string> a = {"stability"};
+  a.insert(a.end(), args.begin(), args.end());
+  return ricochet_main(a, std::cout, std::cerr);
+}
+
+int check_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  std::vector<std::string> a = {"check"};
+  a.insert(a.end(), args.begin(), args.end());
+  return ricochet_main(a, out, err);
+}
+
+}  // namespace ricochet

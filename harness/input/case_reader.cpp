@@ -1,0 +1,377 @@
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "harness/input/case_spec.hpp"
+#include "harness/input/toml_reader.hpp"
+
+namespace ricochet {
+namespace {
+
+constexpr long kMaxDivisions = 100'000;
+
+MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::filesystem::path& dir) {
+  MeshSpec m;
+  m.name = name;
+  m.where = t.path();
+  if (t.has("file")) {
+    std::filesystem::path p = t.text("file");
+    if (p.is_relative()) p = dir / p;
+    m.source = GmshFile{p};
+  } else {
+    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk"});
+    if (gen == "rectangle") {
+      RectangleSpec r;
+      r.width = t.number("width", Range::positive());
+      r.height = t.number("height", Range::positive());
+      r.nx = static_cast<int>(t.integer("nx", 1, 1, kMaxDivisions));
+      r.ny = static_cast<int>(t.integer("ny", 1, 1, kMaxDivisions));
+      r.origin = t.vec2("origin", Vec2::Zero());
+      r.triangles = t.choice("cells", "quad", {"quad", "tri"}) == "tri";
+      m.source = r;
+    } else if (gen == "disk") {
+      DiskSpec d;
+      d.radius = t.number("radius", Range::positive());
+      d.center = t.vec2("center", Vec2::Zero());
+      d.n = static_cast<int>(t.integer("n", 8, 1, kMaxDivisions));
+      m.source = d;
+    } else {
+      ArcPlateSpec a;
+      a.width = t.number("width", Range::positive());
+      a.height = t.number("height", Range::positive());
+      a.radius = t.number("radius", Range::positive());
+      if (!(a.radius > 0.5 * a.width))
+        t.fail("radius", "must be > width/2 = " + std::to_string(0.5 * a.width) + " m for the arc to span the plate");
+      a.nx = static_cast<int>(t.integer("nx", 12, 1, kMaxDivisions));
+      a.ny = static_cast<int>(t.integer("ny", 32, 1, kMaxDivisions));
+      a.bias = t.number("bias", 1.0, Range::positive());
+      a.height_is_overall = t.choice("height_is", "side", {"side", "overall"}) == "overall";
+      m.source = a;
+    }
+  }
+  m.scale = t.number("scale", 1.0, Range::positive());
+  m.offset = t.vec2("offset", Vec2::Zero());
+  t.finish();
+  return m;
+}
+
+MaterialSpec read_material(const TableReader& t) {
+  MaterialSpec m;
+  m.model = t.choice("model", "saint_venant_kirchhoff",
+                     {"saint_venant_kirchhoff", "neo_hookean", "blatz_ko", "mooney_rivlin"});
+  if (m.model == "blatz_ko") {
+    m.shear_modulus = t.number("shear_modulus", Range::positive());
+  } else if (m.model == "mooney_rivlin") {
+    m.c10 = t.number("c10", Range::non_negative());
+    m.c01 = t.number("c01", Range::non_negative());
+    if (!(m.c10 + m.c01 > 0.0)) t.fail("c01", "c10 + c01 must be > 0 (small-strain shear modulus 2 (c10 + c01))");
+    m.bulk_modulus = t.number("bulk_modulus", Range::positive());
+  } else {
+    m.young = t.number("young", Range::positive());
+    m.poisson = t.number("poisson", Range{-1.0, 0.5, true, true});
+  }
+  m.density = t.number("density", Range::positive());
+  t.finish();
+  return m;
+}
+
+BodySpec read_body(const TableReader& t, int index, const std::string& default_mesh) {
+  BodySpec b;
+  b.where = t.path();
+  b.name = t.text("name", "body" + std::to_string(index));
+  b.mesh = t.text("mesh", default_mesh);
+  if (b.mesh.empty()) t.fail("mesh", "missing: name a mesh of [meshes] here or set the top-level key 'mesh'");
+  b.element = t.choice("element", "q4", {"q4", "q4_hourglass"});
+  b.thickness = t.number("thickness", 1.0, Range::positive());
+  b.velocity = t.vec2("velocity", Vec2::Zero());
+  const auto mat = t.table("material");
+  if (!mat) t.fail("material", "missing required table [bodies.material]");
+  b.material = read_material(*mat);
+  if (const auto hg = t.table("hourglass")) {
+    b.hourglass.form = hg->choice("form", "viscous", {"viscous", "stiffness"}) == "viscous"
+                           ? HourglassForm::viscous
+                           : HourglassForm::stiffness;
+    b.hourglass.coeff = hg->number("coeff", 0.1, Range::closed(0.0, 1.0));
+    hg->finish();
+  }
+  for (const auto& ns : t.tables("node_sets")) {
+    BoxNodeSet s;
+    s.name = ns.text("name");
+    const std::vector<double> box = ns.numbers("box", Range{});
+    if (box.size() != 4 || !(box[0] <= box[2]) || !(box[1] <= box[3]))
+      ns.fail("box", "expected [xmin, ymin, xmax, ymax] with xmin <= xmax and ymin <= ymax");
+    s.box = Eigen::Vector4d(box[0], box[1], box[2], box[3]);
+    ns.finish();
+    b.node_sets.push_back(s);
+  }
+  t.finish();
+  return b;
+}
+
+BoundarySpec read_boundary(const TableReader& t, const std::string& first_body) {
+  BoundarySpec b;
+  b.where = t.path();
+  b.body = t.text("body", first_body);
+  b.nodes = t.text("nodes");
+  b.kind = t.choice("type", "velocity", {"velocity", "displacement"}) == "velocity"
+               ? PrescribedDof::Kind::velocity
+               : PrescribedDof::Kind::displacement;
+  if (t.has("x")) b.x = t.number("x", Range{});
+  if (t.has("y")) b.y = t.number("y", Range{});
+  t.number("x", 0.0, Range{});  // marks x and y as known keys when absent
+  t.number("y", 0.0, Range{});
+  b.ramp = t.number("ramp", 0.0, Range::non_negative());
+  if (!b.x && !b.y) t.fail("x", "missing: give x, y or both (a prescribed value per direction)");
+  t.finish();
+  return b;
+}
+
+ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
+  ProbeSpec p;
+  p.where = t.path();
+  p.name = t.text("name");
+  for (char c : p.name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
+      t.fail("name", "got \"" + p.name + "\"; allowed: letters, digits and '_' (it names CSV columns)");
+  p.body = t.text("body", first_body);
+  if (t.has("point")) p.point = t.vec2("point");
+  p.node_set = t.text("node_set", "");
+  if (p.point.has_value() == !p.node_set.empty())
+    t.fail("point", "give exactly one of 'point' (nearest node) or 'node_set' (its first node)");
+  t.finish();
+  return p;
+}
+
+// The vertices of a polyline, `points = [[x, y], ...]`, from the raw TOML node (TableReader
+// reads single pairs only). Errors name the key and its line through t.fail().
+std::vector<Vec2, Eigen::aligned_allocator<Vec2>> read_points(const TableReader& t, const toml::node* n) {
+  if (!n) t.fail("points", "missing required key for type = \"polyline\" (the vertices [[x, y], ...])");
+  const toml::array* a = n->as_array();
+  if (!a) t.fail("points", "expected an array of points [[x, y], ...]");
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> pts;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::array* q = (*a)[i].as_array();
+    if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
+      t.fail("points", "element " + std::to_string(i) + ": expected a point [x, y] of two numbers");
+    const Vec2 v(*(*q)[0].value<double>(), *(*q)[1].value<double>());
+    if (!v.allFinite()) t.fail("points", "element " + std::to_string(i) + ": expected finite numbers");
+    if (!pts.empty() && !((v - pts.back()).norm() > 0.0))
+      t.fail("points", "elements " + std::to_string(i - 1) + " and " + std::to_string(i) +
+                           " coincide (zero-length segment)");
+    pts.push_back(v);
+  }
+  if (pts.size() < 2)
+    t.fail("points", "a polyline needs at least 2 points; got " + std::to_string(pts.size()));
+  return pts;
+}
+
+// `raw_points`: the obstacle's `points` node, if any (read from the document directly).
+ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* raw_points) {
+  ObstacleSpec o;
+  o.where = t.path();
+  o.name = t.text("name", "obstacle" + std::to_string(index));
+  const std::string type = t.choice("type", "line", {"line", "circle", "polyline"});
+  std::vector<std::string> keys{"name", "type", "friction", "friction_by_body"};
+  if (type == "line") {
+    o.point = t.vec2("point", Vec2::Zero());
+    o.normal = t.vec2("normal");
+    if (!(o.normal.norm() > 0.0)) t.fail("normal", "must be a non-zero vector (the outward normal)");
+    o.normal.normalize();
+    o.shape.kind = ObstacleKind::line;
+    o.shape.point = o.point;
+    o.shape.normal = o.normal;
+    keys.insert(keys.end(), {"point", "normal"});
+  } else if (type == "circle") {
+    o.shape.kind = ObstacleKind::circle;
+    o.shape.center = t.vec2("center");
+    o.shape.radius = t.number("radius", Range::positive());
+    o.shape.inside = t.boolean("inside", false);
+    keys.insert(keys.end(), {"center", "radius", "inside"});
+  } else {
+    o.shape.kind = ObstacleKind::polyline;
+    o.shape.points = read_points(t, raw_points);
+    o.shape.left = t.choice("side", "left", {"left", "right"}) == "left";
+    keys.insert(keys.end(), {"points", "side"});
+  }
+  o.shape.name = o.name;
+  o.friction = t.number("friction", 0.0, Range::non_negative());
+  if (const auto by_body = t.table("friction_by_body")) {
+    for (const auto& body : by_body->keys()) o.friction_by_body[body] = by_body->number(body, Range::non_negative());
+    by_body->finish();
+  }
+  // Keys per type (TableReader::finish() would not know `points`, read from the raw node).
+  for (const auto& key : t.keys()) {
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    std::string allowed;
+    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
+    t.fail(key, "unknown key for type = \"" + type + "\"; allowed here: " + allowed);
+  }
+  if (const std::string e = obstacle_error(o.shape); !e.empty()) t.fail("type", e);
+  return o;
+}
+
+}  // namespace
+
+CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
+  toml::table doc = parse_toml_file(file, "case file");
+  CaseContext ctx{file, {}};
+  CaseSpec c;
+  c.file = file;
+  c.overrides = overrides;
+  for (const auto& o : overrides) ctx.overridden.insert(apply_override(doc, file, o));
+
+  const TableReader root(doc, "", ctx);
+  c.name = root.text("name", std::filesystem::path(file).stem().string());
+  c.description = root.text("description", "");
+  c.scheme = scheme_from_name(root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"}));
+  c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
+                                                                              : PlaneMode::strain;
+  c.gravity = root.vec2("gravity", Vec2::Zero());
+  c.default_mesh = root.text("mesh", "");
+
+  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+  const auto meshes = root.table("meshes");
+  if (!meshes) root.fail("meshes", "missing required table [meshes.NAME]");
+  for (const auto& name : meshes->keys()) {
+    const auto mt = meshes->table(name);
+    c.meshes.emplace(name, read_mesh(*mt, name, dir));
+  }
+  meshes->finish();
+  if (c.meshes.empty()) root.fail("meshes", "define at least one mesh as [meshes.NAME]");
+  if (!c.default_mesh.empty() && !c.meshes.count(c.default_mesh))
+    root.fail("mesh", "no mesh named \"" + c.default_mesh + "\" in [meshes]");
+
+  const auto bodies = root.tables("bodies");
+  if (bodies.empty()) root.fail("bodies", "missing: define at least one [[bodies]]");
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    BodySpec b = read_body(bodies[i], static_cast<int>(i), c.default_mesh);
+    if (!c.meshes.count(b.mesh)) bodies[i].fail("mesh", "no mesh named \"" + b.mesh + "\" in [meshes]");
+    for (const auto& other : c.bodies)
+      if (other.name == b.name) bodies[i].fail("name", "duplicate body name \"" + b.name + "\"");
+    c.bodies.push_back(std::move(b));
+  }
+  const std::string first_body = c.bodies.front().name;
+  for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
+
+  const auto obstacles = root.tables("obstacles");
+  for (std::size_t i = 0; i < obstacles.size(); ++i) {
+    const toml::node* raw_points = doc["obstacles"][i]["points"].node();
+    c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i), raw_points));
+    for (const auto& [body, mu] : c.obstacles.back().friction_by_body) {
+      bool known = false;
+      for (const auto& b : c.bodies) known = known || b.name == body;
+      if (!known) obstacles[i].fail("friction_by_body", "no body named \"" + body + "\"");
+    }
+  }
+  const auto pairs = root.tables("contact_pairs");
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const TableReader& t = pairs[i];
+    ContactPairSpec cp;
+    cp.where = t.path();
+    cp.slave = t.text("slave");
+    cp.master = t.text("master");
+    cp.friction = t.number("friction", 0.0, Range::non_negative());
+    cp.two_pass = t.boolean("two_pass", false);
+    t.finish();
+    for (const char* key : {"slave", "master"}) {
+      const std::string& name = std::string(key) == "slave" ? cp.slave : cp.master;
+      bool known = false;
+      for (const auto& b : c.bodies) known = known || b.name == name;
+      if (!known) t.fail(key, "no body named \"" + name + "\"");
+    }
+    if (cp.slave == cp.master) t.fail("master", "must differ from slave (self-contact is not treated)");
+    c.contact_pairs.push_back(std::move(cp));
+  }
+  if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == Scheme::plain_explicit)
+    root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] or [[contact_pairs]] need "
+                        "\"semi_explicit\", \"implicit\" or \"explicit_penalty\"");
+  if (const auto ct = root.table("contact")) {
+    c.contact.level = ct->choice("level", "position", {"position", "velocity"}) == "position"
+                          ? ContactLevel::position
+                          : ContactLevel::velocity;
+    c.contact.rho_factor = ct->number("rho_factor", 1.0, Range::open(0.0, 2.0));
+    c.contact.tolerance = ct->number("tolerance", 1e-10, Range{0.0, 1e-2, true, false});
+    c.contact.max_sweeps = static_cast<int>(ct->integer("max_sweeps", 200, 1, 100000));
+    ct->finish();
+  }
+
+  if (const auto im = root.table("implicit")) {
+    c.implicit.theta = im->number("theta", 0.5, Range::closed(0.5, 1.0));
+    c.implicit.xi = im->number("xi", 0.5, Range::closed(0.5, 1.0));
+    c.implicit.newton_tolerance = im->number("newton_tolerance", 1e-10, Range{0.0, 1e-2, true, false});
+    c.implicit.max_newton_iterations = static_cast<int>(im->integer("max_newton_iterations", 25, 1, 1000));
+    c.implicit.linear_tolerance = im->number("linear_tolerance", 1e-12, Range{0.0, 1e-2, true, false});
+    c.implicit.max_linear_iterations = static_cast<int>(im->integer("max_linear_iterations", 10000, 1, 10'000'000));
+    const std::string solver = im->choice("linear_solver", "auto", {"auto", "pcg", "ldlt"});
+    c.implicit.linear_solver = solver == "pcg"    ? LinearSolverKind::pcg
+                               : solver == "ldlt" ? LinearSolverKind::ldlt
+                                                  : LinearSolverKind::automatic;
+    c.implicit.uzawa_sweeps = static_cast<int>(im->integer("uzawa_sweeps", 30, 0, 100000));
+    im->finish();
+  }
+  if (const auto pe = root.table("penalty")) {
+    c.penalty.scale_factor = pe->number("scale_factor", 0.1, Range{0.0, 1e6, true, false});
+    // LS-DYNA's SOFT = 1 and SOFSCL (soft_dt is set up from the run's step in case_setup).
+    const bool soft = pe->boolean("soft", false);
+    const double soft_scale = pe->number("soft_scale", 0.1, Range{0.0, 1.0, true, false});
+    c.penalty.soft_scale = soft ? soft_scale : 0.0;
+    pe->finish();
+  }
+
+  const auto time = root.table("time");
+  if (!time) root.fail("time", "missing required table [time] (at least time.end)");
+  c.end_time = time->number("end", Range::positive());
+  if (time->is_text("dt")) {
+    if (time->text("dt") != "auto") time->fail("dt", "expected a number > 0 or \"auto\"; got \"" + time->text("dt") + "\"");
+  }
+  else if (time->has("dt"))
+    c.dt = time->number("dt", Range::positive());
+  else
+    time->text("dt", "auto");
+  c.dt_safety = time->number("safety", 0.9, Range{0.0, 1.0, true, false});
+  time->finish();
+  if (c.dt && *c.dt > c.end_time) time->fail("dt", "must be <= time.end");
+
+  c.sample_interval = c.end_time / 1000.0;
+  if (const auto out = root.table("output")) {
+    c.sample_interval = out->number("interval", c.sample_interval, Range::non_negative());
+    c.field_times = out->numbers("fields", Range::non_negative());  // times after the end are skipped
+    const std::string measure = out->choice("stress_measure", "cauchy", {"cauchy", "pk2", "kirchhoff"});
+    c.stress_measure = measure == "pk2"         ? StressMeasure::pk2
+                       : measure == "kirchhoff" ? StressMeasure::kirchhoff
+                                                : StressMeasure::cauchy;
+    c.stress_every_step = out->boolean("stress_every_step", true);
+    for (const auto& p : out->tables("probes")) {
+      c.probes.push_back(read_probe(p, first_body));
+      for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)
+        if (c.probes[k].name == c.probes.back().name) p.fail("name", "duplicate probe name \"" + c.probes.back().name + "\"");
+    }
+    out->finish();
+  }
+  if (const auto dv = root.table("divergence")) {
+    c.energy_growth_limit = dv->number("energy_growth", 2.0, Range{1.0, 1e12, true, false});
+    c.monitor_every = static_cast<int>(dv->integer("check_every", 50, 1, 1'000'000));
+    dv->finish();
+  }
+  root.finish();
+  return c;
+}
+
+const char* scheme_name(Scheme s) {
+  switch (s) {
+    case Scheme::semi_explicit: return "semi_explicit";
+    case Scheme::implicit: return "implicit";
+    case Scheme::explicit_penalty: return "explicit_penalty";
+    case Scheme::plain_explicit: break;
+  }
+  return "explicit";
+}
+
+Scheme scheme_from_name(const std::string& name) {
+  if (name == "semi_explicit") return Scheme::semi_explicit;
+  if (name == "implicit") return Scheme::implicit;
+  if (name == "explicit_penalty") return Scheme::explicit_penalty;
+  return Scheme::plain_explicit;
+}
+
+}  // namespace ricochet

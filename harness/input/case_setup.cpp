@@ -1,0 +1,182 @@
+#include "harness/input/case_setup.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "harness/input/gmsh_reader.hpp"
+#include "harness/input/input_error.hpp"
+#include "solver/schemes/time_step.hpp"
+
+namespace ricochet {
+namespace {
+
+Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
+  Mesh mesh;
+  try {
+    if (const auto* r = std::get_if<RectangleSpec>(&m.source))
+      mesh = make_rectangle(*r);
+    else if (const auto* a = std::get_if<ArcPlateSpec>(&m.source))
+      mesh = make_arc_plate(*a);
+    else if (const auto* d = std::get_if<DiskSpec>(&m.source))
+      mesh = make_disk(*d);
+    else
+      mesh = read_gmsh(std::get<GmshFile>(m.source).path);
+  } catch (const InputError& e) {
+    throw InputError(c.file + ": " + m.where + ": " + e.what());
+  }
+  mesh.nodes *= m.scale;
+  mesh.nodes.colwise() += m.offset;
+  return mesh;
+}
+
+Material make_material(const MaterialSpec& m, PlaneMode plane) {
+  if (m.model == "neo_hookean") return NeoHookean::make(m.young, m.poisson, m.density, plane);
+  if (m.model == "blatz_ko") return BlatzKo::make(m.shear_modulus, m.density, plane);
+  if (m.model == "mooney_rivlin")
+    return MooneyRivlin::make(m.c10, m.c01, m.bulk_modulus, m.density, plane);
+  return StVenantKirchhoff::make(m.young, m.poisson, m.density, plane);
+}
+
+std::string set_names(const Mesh& m) {
+  std::string s;
+  for (const auto& [name, nodes] : m.node_sets) s += (s.empty() ? "" : ", ") + name;
+  return s.empty() ? "(none)" : s;
+}
+
+int body_index(const CaseSpec& c, const std::string& name, const std::string& where, const char* key) {
+  for (std::size_t i = 0; i < c.bodies.size(); ++i)
+    if (c.bodies[i].name == name) return static_cast<int>(i);
+  throw InputError(c.file + ": " + where + "." + key + ": no body named \"" + name + "\"");
+}
+
+const std::vector<int>& node_set(const CaseSpec& c, const Mesh& m, const std::string& name,
+                                 const std::string& where, const char* key) {
+  const auto it = m.node_sets.find(name);
+  if (it == m.node_sets.end())
+    throw InputError(c.file + ": " + where + "." + key + ": no node set \"" + name +
+                     "\" in this body; available: " + set_names(m));
+  return it->second;
+}
+
+}  // namespace
+
+PreparedCase prepare_case(const CaseSpec& spec) {
+  PreparedCase p;
+  p.spec = spec;
+  const CaseSpec& c = p.spec;
+
+  std::vector<BodyInput> inputs;
+  for (const BodySpec& b : c.bodies) {
+    Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
+    {
+      for (const BoxNodeSet& s : b.node_sets) {
+        std::vector<int> nodes;
+        for (int i = 0; i < mesh.num_nodes(); ++i) {
+          const Vec2 x = mesh.nodes.col(i);
+          if (x.x() >= s.box[0] && x.y() >= s.box[1] && x.x() <= s.box[2] && x.y() <= s.box[3])
+            nodes.push_back(i);
+        }
+        if (nodes.empty())
+          throw InputError(c.file + ": " + b.where + ".node_sets: box of \"" + s.name + "\" selects no node");
+        mesh.node_sets[s.name] = std::move(nodes);
+      }
+    }
+    BodyInput in;
+    in.name = b.name;
+    in.material = make_material(b.material, c.plane);
+    in.quad_element = b.element == "q4" ? QuadElement::full_2x2 : QuadElement::one_point_hourglass;
+    in.hourglass = b.hourglass;
+    in.thickness = b.thickness;
+    in.initial_velocity = b.velocity;
+    in.mesh = mesh;
+    p.meshes.push_back(std::move(mesh));
+    inputs.push_back(std::move(in));
+  }
+  try {
+    p.model = build_model(inputs, c.plane, c.gravity);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.file + ": bodies: " + e.what());
+  }
+
+  RunSettings& s = p.settings;
+  s.end_time = c.end_time;
+  s.sample_interval = c.sample_interval;
+  s.field_times = c.field_times;
+  s.stress_measure = c.stress_measure;
+  s.stress_every_step = c.stress_every_step;
+  s.energy_growth_limit = c.energy_growth_limit;
+  s.monitor_every = c.monitor_every;
+
+  std::map<int, std::string> prescribed_by;  // dof -> boundary key, to reject conflicts
+  for (const BoundarySpec& b : c.boundaries) {
+    const int bi = body_index(c, b.body, b.where, "body");
+    const int node0 = p.model.bodies[bi].first_node;
+    for (int local : node_set(c, p.meshes[bi], b.nodes, b.where, "nodes")) {
+      for (int k = 0; k < 2; ++k) {
+        const std::optional<double>& value = k == 0 ? b.x : b.y;
+        if (!value) continue;
+        const int dof = 2 * (node0 + local) + k;
+        const auto [it, fresh] = prescribed_by.emplace(dof, b.where);
+        if (!fresh)
+          throw InputError(c.file + ": " + b.where + ": node " + std::to_string(local) + " direction " +
+                           (k == 0 ? "x" : "y") + " is already prescribed by " + it->second);
+        s.prescribed.push_back({dof, b.kind, *value, b.ramp});
+      }
+    }
+  }
+
+  for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back(o.shape);
+  s.friction.assign(c.bodies.size(), std::vector<double>(c.obstacles.size(), 0.0));
+  for (std::size_t b = 0; b < c.bodies.size(); ++b)
+    for (std::size_t o = 0; o < c.obstacles.size(); ++o) {
+      const auto it = c.obstacles[o].friction_by_body.find(c.bodies[b].name);
+      s.friction[b][o] = it != c.obstacles[o].friction_by_body.end() ? it->second : c.obstacles[o].friction;
+    }
+  for (const ContactPairSpec& cp : c.contact_pairs) {
+    const int slave = body_index(c, cp.slave, cp.where, "slave"), master = body_index(c, cp.master, cp.where, "master");
+    s.body_pairs.push_back({slave, master, cp.friction});
+    if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction});
+  }
+  s.contact = c.contact;
+  s.penalty = c.penalty;
+  s.contact_method = c.scheme == Scheme::explicit_penalty ? RunSettings::ContactMethod::penalty
+                                                    : RunSettings::ContactMethod::bipotential;
+  // The soft constraint's springs k1 = soft_scale m / (2 dt^2) use the step the run would have
+  // without them: the elements' automatic step, or the fixed time.dt (LS-DYNA: the initial step).
+  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto() ? stable_time_step(p.model, c.dt_safety) : *c.dt;
+  // The automatic step: safety x the solver's critical step, which with penalty contact is the
+  // combined limit of elements and springs (min(dt_e, dt_p) alone is not stable when the two
+  // are close: tests/test_penalty_contact.cpp).
+  // It also gives the springs' own limit, which the summary reports for fixed steps too.
+  const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
+  s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;
+
+  for (const ProbeSpec& pr : c.probes) {
+    const int bi = body_index(c, pr.body, pr.where, "body");
+    const Mesh& m = p.meshes[bi];
+    ProbeInfo info{pr.name, pr.body, 0, Vec2::Zero(), 0.0};
+    int local = 0;
+    if (pr.point) {
+      double best = 1e300;
+      for (int i = 0; i < m.num_nodes(); ++i) {
+        const double d = (m.nodes.col(i) - *pr.point).norm();
+        if (d < best) best = d, local = i;
+      }
+      info.distance = best;
+    } else {
+      local = node_set(c, m, pr.node_set, pr.where, "node_set").front();
+    }
+    info.node = p.model.bodies[bi].first_node + local;
+    info.position = m.nodes.col(local);
+    p.probes.push_back(info);
+    s.probes.push_back({pr.name, info.node});
+  }
+  return p;
+}
+
+RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
+  if (pc.spec.scheme == Scheme::implicit) return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
+  return run_explicit(pc.model, pc.settings, progress);
+}
+
+}  // namespace ricochet

@@ -1,0 +1,153 @@
+// A case file, read and validated: typed values only, every default applied. The keys, units,
+// defaults and ranges are documented in docs/case-format.md.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "harness/input/mesh_generators.hpp"
+#include "solver/schemes/implicit.hpp"
+#include "solver/model/model.hpp"
+
+namespace ricochet {
+
+// The time-integration scheme of a case (case key `scheme`, docs/case-format.md), parsed once.
+enum class Scheme {
+  plain_explicit,    // "explicit": central differences, no contact
+  semi_explicit,     // "semi_explicit": central differences, bi-potential contact (the paper's)
+  implicit,          // "implicit": the first-order theta-scheme
+  explicit_penalty,  // "explicit_penalty": central differences, penalty springs
+};
+
+// The case-file name of a scheme: "explicit", "semi_explicit", "implicit", "explicit_penalty".
+const char* scheme_name(Scheme s);
+
+// The scheme of a case-file name; the reader has checked it is one of the four.
+Scheme scheme_from_name(const std::string& name);
+
+struct GmshFile {
+  std::filesystem::path path;  // resolved against the case file's folder
+};
+
+struct MeshSpec {
+  std::string name;
+  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile> source;
+  double scale = 1.0;            // coordinates multiplied by this [-]
+  Vec2 offset = Vec2::Zero();    // then translated by this [m]
+  std::string where;             // key path for error messages, e.g. "meshes.M1"
+};
+
+struct MaterialSpec {
+  std::string model = "saint_venant_kirchhoff";  // or "neo_hookean", "blatz_ko", "mooney_rivlin"
+  double young = 0.0;    // [Pa] (saint_venant_kirchhoff, neo_hookean)
+  double poisson = 0.0;  // [-]  (saint_venant_kirchhoff, neo_hookean)
+  double shear_modulus = 0.0;  // [Pa] (blatz_ko)
+  double c10 = 0.0, c01 = 0.0, bulk_modulus = 0.0;  // [Pa] (mooney_rivlin)
+  double density = 0.0;  // [kg/m^3]
+};
+
+struct BoxNodeSet {
+  std::string name;
+  Eigen::Vector4d box;  // xmin, ymin, xmax, ymax in reference coordinates [m]
+};
+
+struct BodySpec {
+  std::string name;
+  std::string mesh;  // key of CaseSpec::meshes
+  std::string element = "q4";  // "q4" (2x2 Gauss) or "q4_hourglass" (1 point + FB)
+  HourglassControl hourglass;
+  MaterialSpec material;
+  double thickness = 1.0;             // [m]
+  Vec2 velocity = Vec2::Zero();       // [m/s]
+  std::vector<BoxNodeSet> node_sets;
+  std::string where;
+};
+
+struct BoundarySpec {
+  std::string body;
+  std::string nodes;  // node set of that body
+  PrescribedDof::Kind kind = PrescribedDof::Kind::velocity;
+  std::optional<double> x, y;  // [m/s] or [m]; absent = that direction is free
+  double ramp = 0.0;           // [s]
+  std::string where;
+};
+
+struct ProbeSpec {
+  std::string name;
+  std::string body;
+  std::optional<Vec2> point;  // nearest node to this reference point [m]
+  std::string node_set;       // or the first node of this set
+  std::string where;
+};
+
+struct ObstacleSpec {
+  std::string name;
+  Vec2 point = Vec2::Zero();    // [m]
+  Vec2 normal = Vec2::UnitY();  // normalized on read
+  Obstacle shape;               // the checked geometry of any type (line: same point, normal)
+  double friction = 0.0;        // mu for every body [-]
+  std::map<std::string, double> friction_by_body;  // per-body mu [-]
+  std::string where;
+};
+
+// Contact between two bodies, node to segment (solver/contact/body_contact.hpp).
+struct ContactPairSpec {
+  std::string slave;       // body whose boundary nodes are checked
+  std::string master;      // body whose boundary segments they are checked against
+  double friction = 0.0;   // mu [-]
+  bool two_pass = false;   // also the master's nodes against the slave's segments
+  std::string where;
+};
+
+struct CaseSpec {
+  std::string file;  // as given
+  std::string name;
+  std::string description;
+  std::vector<std::string> overrides;  // the --set arguments, in order
+
+  Scheme scheme = Scheme::plain_explicit;
+  PlaneMode plane = PlaneMode::stress;
+  Vec2 gravity = Vec2::Zero();  // [m/s^2]
+
+  std::map<std::string, MeshSpec> meshes;
+  std::string default_mesh;  // top-level `mesh`
+  std::vector<BodySpec> bodies;
+  std::vector<BoundarySpec> boundaries;
+  std::vector<ObstacleSpec> obstacles;
+  std::vector<ContactPairSpec> contact_pairs;
+  ContactSettings contact;
+  ImplicitSettings implicit;
+  PenaltySettings penalty;
+
+  double end_time = 0.0;          // [s]
+  std::optional<double> dt;       // [s]; absent = automatic
+  double dt_safety = 0.9;         // [-]
+
+  double sample_interval = 0.0;   // [s]
+  std::vector<double> field_times;  // [s]
+  StressMeasure stress_measure = StressMeasure::cauchy;  // of von_mises_max and the fields
+  bool stress_every_step = true;  // von_mises_max over every step (else over the samples)
+  std::vector<ProbeSpec> probes;
+
+  double energy_growth_limit = 2.0;  // [-]
+  int monitor_every = 50;            // [steps]
+};
+
+// Parses FILE, applies the --set overrides ("key=value", TOML value syntax, or a bare word
+// taken as a string), validates everything and returns the typed case. Throws InputError.
+CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides);
+
+// "bodies[0].material.young" or "bodies.0.material.young" -> {"bodies", "0", "material", "young"}.
+std::vector<std::string> split_key(const std::string& key);
+
+// Applies one "key.path=value" override to a parsed document (exposed for tests).
+// Returns the dotted key. Throws InputError naming the argument.
+std::string apply_override(toml::table& doc, const std::string& file, const std::string& arg);
+
+}  // namespace ricochet

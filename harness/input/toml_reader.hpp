@@ -1,0 +1,89 @@
+// Validating access to one TOML table of a case file. Every accessor checks type and range
+// and throws InputError "FILE:LINE: KEY: what is wrong; allowed: ..."; finish() rejects the
+// keys nobody read, listing the keys that are allowed. Values set from the command line
+// (--set) are reported as "--set KEY" instead of a line.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <limits>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "harness/input/input_error.hpp"
+#include "solver/model/types.hpp"
+
+namespace ricochet {
+
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false, hi_open = false;
+  static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range non_negative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range closed(double a, double b) { return {a, b, false, false}; }
+  static Range open(double a, double b) { return {a, b, true, true}; }
+  bool contains(double x) const;
+  std::string describe() const;  // e.g. "> 0", "in [0, 1]", "in (-1, 0.5)"
+};
+
+// Parses TOML text; a syntax error is an InputError "FILE:LINE: TOML syntax error: ...".
+toml::table parse_toml(std::string_view text, const std::string& file);
+// The same for a file; `what` names it when it cannot be opened ("FILE: cannot open case file").
+toml::table parse_toml_file(const std::string& file, const std::string& what);
+
+// "a table", "an array", "a string", "an integer", "a number", "a boolean" or "a date/time":
+// the kind of a TOML value, for error messages.
+std::string type_name(const toml::node& n);
+
+// Shared by all readers of one case file.
+struct CaseContext {
+  std::string file;                 // as given on the command line
+  std::set<std::string> overridden;  // dotted keys set by --set
+};
+
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string path, const CaseContext& ctx);
+
+  bool has(std::string_view key) const;
+  bool is_text(std::string_view key) const;  // present and a string
+  double number(std::string_view key, Range r) const;
+  double number(std::string_view key, double fallback, Range r) const;
+  long integer(std::string_view key, long fallback, long lo, long hi) const;
+  bool boolean(std::string_view key, bool fallback) const;
+  std::string text(std::string_view key) const;
+  std::string text(std::string_view key, std::string fallback) const;
+  std::string choice(std::string_view key, std::string fallback,
+                     const std::vector<std::string>& allowed) const;
+  Vec2 vec2(std::string_view key, Vec2 fallback) const;
+  Vec2 vec2(std::string_view key) const;
+  std::vector<double> numbers(std::string_view key, Range each) const;  // empty if absent
+  // A string or an array of non-empty strings; empty if absent.
+  std::vector<std::string> texts(std::string_view key) const;
+  std::optional<TableReader> table(std::string_view key) const;
+  std::vector<TableReader> tables(std::string_view key) const;  // array of tables; empty if absent
+  std::vector<std::string> keys() const;  // all keys of this table (marks none as read)
+
+  // Throws for the first key that no accessor asked for.
+  void finish() const;
+
+  // Key path of `key` inside this table, e.g. "bodies[0].material.young".
+  std::string key_path(std::string_view key) const;
+  [[noreturn]] void fail(std::string_view key, const std::string& what) const;
+  const std::string& path() const { return path_; }
+
+ private:
+  const toml::node& require(std::string_view key) const;
+  const toml::node* find(std::string_view key) const;
+  std::string where(std::string_view key) const;
+
+  const toml::table* table_;
+  std::string path_;
+  const CaseContext* ctx_;
+  mutable std::set<std::string, std::less<>> read_;
+};
+
+}  // namespace ricochet

@@ -1,0 +1,271 @@
+#include "harness/outputs/run_outputs.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+
+#include "harness/outputs/atomic_file.hpp"
+#include "harness/outputs/csv_writer.hpp"
+#include "harness/outputs/vtu_writer.hpp"
+
+namespace ricochet {
+namespace {
+
+const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
+
+std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
+  const Model& m = pc.model;
+  VtuData d;
+  d.time = f.time;
+  const Eigen::Map<const Eigen::Matrix2Xd> u(f.u.data(), 2, m.num_nodes());
+  const Eigen::Map<const Eigen::Matrix2Xd> v(f.v.data(), 2, m.num_nodes());
+  d.points = m.ref + u;
+  std::vector<int> body(m.num_cells());
+  // Cells in global order: per body its quads, then its triangles (as the model numbers them).
+  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+    const int n0 = m.bodies[b].first_node;
+    for (auto q : pc.meshes[b].quads) {
+      for (int& i : q) i += n0;
+      d.quads.push_back(q);
+    }
+  }
+  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+    const int n0 = m.bodies[b].first_node;
+    for (auto t : pc.meshes[b].tris) {
+      for (int& i : t) i += n0;
+      d.tris.push_back(t);
+    }
+  }
+  // VTU order is all quads then all triangles; map the per-cell values to it.
+  std::vector<double> vm;
+  std::vector<int> body_id;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+      const int c0 = m.bodies[b].first_cell;
+      const int nq = static_cast<int>(pc.meshes[b].quads.size());
+      const int begin = pass == 0 ? c0 : c0 + nq;
+      const int end = pass == 0 ? c0 + nq : c0 + m.bodies[b].num_cells;
+      for (int c = begin; c < end; ++c) {
+        vm.push_back(f.von_mises[c]);
+        body_id.push_back(static_cast<int>(b));
+      }
+    }
+  d.point_vectors = {{"displacement", Eigen::Matrix2Xd(u)}, {"velocity", Eigen::Matrix2Xd(v)}};
+  d.cell_scalars = {{"von_mises", vm}};
+  d.cell_ints = {{"body", body_id}};
+  return format_vtu(d);
+}
+
+}  // namespace
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+Json build_info() {
+  Json build = Json::object();
+  build["compiler"] = __VERSION__;
+#ifdef NDEBUG
+  build["build_type"] = "release";
+#else
+  build["build_type"] = "debug";
+#endif
+  return build;
+}
+
+std::string joined_bodies(const CaseSpec& c, bool element) {
+  std::string s;
+  for (const auto& b : c.bodies) s += (s.empty() ? "" : "+") + (element ? b.element : b.mesh);
+  return s;
+}
+
+Json case_identity(const PreparedCase& pc) {
+  const CaseSpec& c = pc.spec;
+  Json j = Json::object();
+  j["ricochet_version"] = RICOCHET_VERSION;
+  j["case"] = c.name;
+  j["case_file"] = c.file;
+  Json overrides = Json::array();
+  for (const auto& o : c.overrides) overrides.push_back(o);
+  j["overrides"] = overrides;
+  j["scheme"] = scheme_name(c.scheme);
+  j["mesh"] = joined_bodies(c, false);
+  j["element"] = joined_bodies(c, true);
+  return j;
+}
+
+Json run_summary(const PreparedCase& pc, const RunResult& r) {
+  const CaseSpec& c = pc.spec;
+  Json j = case_identity(pc);
+  j["plane"] = plane_name(c.plane);
+  // The friction coefficient of the first body-obstacle pair (null without obstacles).
+  if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
+    j["friction_coeff"] = nullptr;
+  else
+    j["friction_coeff"] = pc.settings.friction.front().front();
+  j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
+  j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
+  const bool any_contact = !pc.settings.obstacles.empty() || !pc.settings.body_pairs.empty();
+  j["contact_level"] = !any_contact || pc.spec.scheme == Scheme::explicit_penalty ? Json()
+                       : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
+  j["nodes"] = pc.model.num_nodes();
+  j["elements"] = pc.model.num_cells();
+  j["dt"] = r.dt;
+  j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
+  j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();
+  j["critical_dt"] = pc.model.critical_dt;
+  j["penalty_critical_dt"] = pc.penalty_critical_dt > 0.0 ? Json(pc.penalty_critical_dt) : Json();
+  j["end_time"] = c.end_time;
+  j["time_reached"] = r.end_time;
+  j["steps"] = r.steps;
+  j["planned_steps"] = r.planned_steps;
+  j["status"] = r.status == RunStatus::ok ? "ok" : "diverged";
+  if (r.status == RunStatus::diverged) {
+    Json d = Json::object();
+    d["reason"] = r.reason;
+    d["step"] = r.diverged_step;
+    d["time"] = r.diverged_time;
+    j["diverged"] = d;
+  } else {
+    j["diverged"] = nullptr;
+  }
+  if (pc.spec.scheme == Scheme::implicit) {
+    Json im = Json::object();
+    im["theta"] = pc.spec.implicit.theta;
+    im["xi"] = pc.spec.implicit.xi;
+    im["newton_iterations"] = r.newton_iterations;
+    im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.newton_iterations) / r.steps : 0.0;
+    im["linear_iterations"] = r.linear_iterations;
+    im["linear_solver"] = r.direct_solver ? "ldlt" : "pcg";
+    j["implicit"] = im;
+  } else {
+    j["implicit"] = nullptr;
+  }
+  if (pc.spec.scheme == Scheme::explicit_penalty) {
+    j["penalty_scale_factor"] = pc.spec.penalty.scale_factor;
+    j["penalty_soft_scale"] = pc.settings.penalty.soft_scale;
+    j["penalty_soft_dt"] = pc.settings.penalty.soft_scale > 0.0 ? Json(pc.settings.penalty.soft_dt) : Json();
+  } else {
+    j["penalty_scale_factor"] = nullptr;
+    j["penalty_soft_scale"] = nullptr;
+    j["penalty_soft_dt"] = nullptr;
+  }
+  j["wall_seconds"] = r.wall_seconds;
+  j["cpu_seconds"] = r.cpu_seconds;
+  j["element_steps_per_second"] = r.element_steps_per_second;
+  j["initial_energy"] = r.initial_energy;
+  j["energy_error_max"] = r.energy_error_max;
+  j["penetration_max"] = r.penetration_max;
+  j["friction_dissipation"] = r.friction_dissipation;
+  j["contact_work"] = r.contact_work;
+  // Stress peaks over every step (not over the samples), docs/outputs.md.
+  auto where = [&](const StressPeak& p) {
+    if (p.cell < 0) return Json();
+    Json w = Json::object();
+    w["body"] = pc.model.bodies[p.body].name;
+    w["element"] = p.element;
+    w["x"] = p.x;
+    w["y"] = p.y;
+    return w;
+  };
+  auto by_measure = [](const VonMises2& maxima) {
+    Json m = Json::object();
+    for (int k = 0; k < kStressMeasures; ++k) m[stress_measure_name(static_cast<StressMeasure>(k))] = maxima[k];
+    return m;
+  };
+  j["stress_measure"] = stress_measure_name(r.stress_measure);
+  j["stress_every_step"] = pc.settings.stress_every_step;
+  j["von_mises_max"] = r.von_mises_max;
+  j["von_mises_max_time"] = r.von_mises_max_time;
+  j["von_mises_max_at"] = where(r.von_mises_peak);
+  j["von_mises_interior_max"] = r.von_mises_interior_peak.value;
+  j["von_mises_interior_max_time"] = r.von_mises_interior_peak.time;
+  j["von_mises_interior_max_at"] = where(r.von_mises_interior_peak);
+  j["von_mises_sampled_max"] = by_measure(r.von_mises_sampled_max);
+  j["total_mass"] = r.total_mass;
+  j["contact_impulse_normal"] = r.contact_impulse_normal;
+  j["contact_impulse_tangential"] = r.contact_impulse_tangential;
+  const bool touched = r.contact_first_time >= 0.0;
+  j["contact_start_time"] = touched ? Json(r.contact_first_time) : Json();
+  j["contact_end_time"] = touched ? Json(r.contact_last_time) : Json();
+  j["contact_duration"] = touched ? Json(r.contact_last_time - r.contact_first_time) : Json();
+  Json ci = Json::object();
+  ci["mean"] = r.contact_sweeps_mean;
+  ci["max"] = r.contact_sweeps_max;
+  ci["steps_with_contact"] = r.contact_steps;
+  // The time with at least one active contact, steps x dt [s]: a contact duration that gates
+  // can compare across time steps and meshes.
+  ci["contact_time"] = static_cast<double>(r.contact_steps) * r.dt;
+  ci["unconverged_steps"] = r.contact_unconverged_steps;
+  ci["candidates"] = r.contact_candidates;
+  j["contact_iterations"] = ci;
+  const History& h = r.history;
+  if (h.rows() > 0) {
+    Json fin = Json::object();
+    const std::size_t last = h.rows() - 1;
+    for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
+                          "external_work", "friction_dissipation", "contact_work", "total_energy",
+                          "energy_error", "momentum_x", "momentum_y", "angular_momentum", "contact_work_normal"})
+      fin[k] = h.at(last, h.column(k));
+    j["final"] = fin;
+    // Rebound velocity: the final linear momentum over the total mass [m/s].
+    const bool massive = r.total_mass > 0.0;
+    j["rebound_velocity_x"] = massive ? Json(h.at(last, h.column("momentum_x")) / r.total_mass) : Json();
+    j["rebound_velocity_y"] = massive ? Json(h.at(last, h.column("momentum_y")) / r.total_mass) : Json();
+  }
+  Json probes = Json::array();
+  for (const auto& p : pc.probes) {
+    Json q = Json::object();
+    q["name"] = p.name;
+    q["body"] = p.body;
+    q["node"] = p.node;
+    q["x"] = p.position.x();
+    q["y"] = p.position.y();
+    q["distance"] = p.distance;
+    probes.push_back(q);
+  }
+  j["probes"] = probes;
+  j["history_rows"] = static_cast<long>(h.rows());
+  j["field_files"] = static_cast<long>(r.fields.size());
+  j["build"] = build_info();
+  j["written_at"] = utc_now();
+  return j;
+}
+
+void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r) {
+  std::filesystem::create_directories(dir);
+  // Stale results of an earlier run in the same folder must not describe this one.
+  std::filesystem::remove(dir / "summary.json");
+  std::filesystem::remove_all(dir / "fields");
+  write_file_atomic(dir / "history.csv", format_csv(r.history.columns, r.history.values));
+  if (!r.fields.empty()) {
+    std::vector<std::pair<double, std::string>> series;
+    for (const auto& f : r.fields) {
+      char name[64];
+      std::snprintf(name, sizeof name, "_%08ld.vtu", f.step);
+      const std::string file = pc.spec.name + name;
+      write_file_atomic(dir / "fields" / file, format_vtu_snapshot(pc, f));
+      series.emplace_back(f.time, file);
+    }
+    write_file_atomic(dir / "fields" / "fields.pvd", format_pvd(series));
+  }
+  write_file_atomic(dir / "summary.json", dump_json(run_summary(pc, r)));
+}
+
+std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s: %s  t=%.4g s  %ld steps of %.4g s  %d cells  %.3g s wall  %.3g element-steps/s"
+                "  energy_error_max=%.3g  penetration_max=%.3g m  von_mises_max=%.4g Pa",
+                pc.spec.name.c_str(), r.status == RunStatus::ok ? "ok" : "DIVERGED", r.end_time,
+                r.steps, r.dt, pc.model.num_cells(), r.wall_seconds, r.element_steps_per_second,
+                r.energy_error_max, r.penetration_max, r.von_mises_max);
+  std::string s = buf;
+  if (r.status == RunStatus::diverged) s += "  (" + r.reason + ")";
+  return s + "  -> " + dir;
+}
+
+}  // namespace ricochet

@@ -1,0 +1,158 @@
+#include "harness/sweeps/sweep_plan.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "harness/input/case_spec.hpp"
+#include "harness/input/input_error.hpp"
+#include "harness/sweeps/sweep.hpp"
+
+namespace ricochet {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string fnv1a(const std::string& s) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+}  // namespace
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+double json_number(const Json& summary, std::string_view key, double fallback) {
+  const auto v = summary.find(key);
+  return v != summary.end() && v->is_number() ? v->get<double>() : fallback;
+}
+
+std::string json_text(const Json& summary, std::string_view key) {
+  const auto v = summary.find(key);
+  if (v == summary.end()) return {};
+  if (v->is_string()) return v->get<std::string>();
+  return v->is_number() ? compact_json(*v) : std::string();
+}
+
+void set_finished(RunRecord& record, Json summary) {
+  record.status = json_text(summary, "status");
+  if (record.status != "ok" && record.status != "diverged") record.status = "diverged";
+  record.reason.clear();
+  if (const auto d = summary.find("diverged"); d != summary.end() && d->is_object())
+    record.reason = json_text(*d, "reason");
+  record.summary = std::move(summary);
+}
+
+SweepPlan::SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options)
+    : spec_(spec), runs_(runs), options_(options) {
+  for (std::size_t i = 0; i < runs_.size(); ++i) index_[runs_[i].id] = i;
+  for (const SweepRun& r : runs_)
+    if (!base_hash_.count(r.base)) base_hash_[r.base] = fnv1a(read_text(r.base));
+}
+
+fs::path SweepPlan::folder(std::size_t i) const { return options_.out_dir / runs_[i].folder(); }
+
+int SweepPlan::repeats(std::size_t i) const { return runs_[i].is_reference ? 1 : options_.repeat; }
+
+fs::path SweepPlan::repeat_dir(std::size_t i, int k) const {
+  return repeats(i) == 1 ? folder(i) : folder(i) / ("repeat-" + std::to_string(k));
+}
+
+std::string SweepPlan::request(std::size_t i) const {
+  const SweepRun& run = runs_[i];
+  Json j = Json::object();
+  j["run_id"] = run.id;
+  j["base"] = run.base.string();
+  j["base_fnv1a"] = base_hash_.at(run.base);
+  Json o = Json::array();
+  for (const auto& a : run.set_args()) o.push_back(a);
+  j["overrides"] = o;
+  j["repeats"] = repeats(i);
+  return dump_json(j);
+}
+
+std::vector<std::size_t> SweepPlan::queue(const std::vector<RunRecord>& records) const {
+  std::vector<std::size_t> queue;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t i = 0; i < runs_.size(); ++i)
+      if (records[i].state == RunRecord::State::pending && runs_[i].is_reference == (pass == 0)) queue.push_back(i);
+  return queue;
+}
+
+bool SweepPlan::startable(std::size_t i, const std::vector<RunRecord>& records) const {
+  const std::string& ref = runs_[i].reference_id;
+  return runs_[i].is_reference || ref.empty() || records[index_.at(ref)].state == RunRecord::State::done;
+}
+
+bool SweepPlan::load_finished(std::size_t i, RunRecord& record) const {
+  const fs::path f = folder(i);
+  if (read_text(f / "overrides.json") != request(i)) return false;
+  if (!fs::is_regular_file(f / "summary.json")) return false;
+  try {
+    std::vector<double> wall, cpu;
+    for (int k = 1; k <= repeats(i); ++k) {
+      const Json s = read_json_file(repeat_dir(i, k) / "summary.json");
+      wall.push_back(json_number(s, "wall_seconds", std::nan("")));
+      cpu.push_back(json_number(s, "cpu_seconds", std::nan("")));
+    }
+    set_finished(record, read_json_file(f / "summary.json"));
+    record.wall = std::move(wall);
+    record.cpu = std::move(cpu);
+  } catch (const JsonParseError&) {
+    return false;
+  }
+  return true;
+}
+
+void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs) {
+  std::map<std::string, const SweepGroup*> groups;
+  for (const SweepGroup& g : spec.groups) groups[g.name] = &g;
+  for (const SweepRun& r : runs) {
+    CaseSpec c;
+    try {
+      c = read_case(r.base.string(), r.set_args());
+    } catch (const InputError& e) {
+      // Point at the sweep-file value that the case rejects, when the message names it.
+      const std::string msg = e.what();
+      std::string where = spec.file;
+      if (const auto at = msg.find(": --set "); at != std::string::npos) {
+        const std::size_t from = at + 8;
+        const std::string key = msg.substr(from, msg.find(':', from) - from);
+        for (const SweepValue& v : r.overrides)
+          if (v.key == key) where = v.where;
+      }
+      throw InputError(where + ": run " + r.id + ": " + msg);
+    }
+    if (!r.error_probe.empty()) {
+      std::string names;
+      bool found = false;
+      for (const ProbeSpec& p : c.probes) {
+        names += (names.empty() ? "" : ", ") + p.name;
+        found = found || p.name == r.error_probe;
+      }
+      if (!found) {
+        const SweepGroup* g = groups.count(r.group) ? groups.at(r.group) : nullptr;
+        const bool shared = r.reference_kind == "shared" || (spec.reference.present && r.id == spec.reference.id());
+        const std::string where = shared ? spec.reference.where : g ? g->where : spec.file;
+        throw InputError(where + ".error_probe: the case of run " + r.id + " has no probe \"" + r.error_probe +
+                         "\"; its probes: " + (names.empty() ? "none" : names));
+      }
+    }
+  }
+}
+
+}  // namespace ricochet

@@ -1,0 +1,91 @@
+// The plan of a sweep (harness/sweeps/sweep.hpp): its runs with their folders, how often each runs,
+// the order they start in, and each run's identity: the request (overrides.json) a finished run
+// must match to be reused, so that an interrupted or repeated sweep resumes instead of
+// rerunning. Also the per-run record that execution, the table and sweep.json share.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "harness/outputs/json_io.hpp"
+#include "harness/sweeps/sweep_spec.hpp"
+
+namespace ricochet {
+
+struct SweepOptions;
+
+// What is known about one run of the sweep.
+struct RunRecord {
+  enum class State { pending, active, done } state = State::pending;
+  bool resumed = false;             // finished by an earlier invocation
+  std::string status, reason;       // ok / diverged / failed, and why (empty for ok runs)
+  std::optional<Json> summary;      // the run's summary.json (the last repeat's)
+  std::vector<double> wall, cpu;    // per repeat, from the summaries [s]
+};
+
+class SweepPlan {
+ public:
+  // Hashes each run's base case (its text, FNV-1a), so that editing one base case reruns only
+  // the runs made from it.
+  SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options);
+
+  const SweepSpec& spec() const { return spec_; }
+  const std::vector<SweepRun>& runs() const { return runs_; }
+  const SweepRun& run(std::size_t i) const { return runs_[i]; }
+  std::size_t size() const { return runs_.size(); }
+  // The index of run `id` (which must exist).
+  std::size_t index(const std::string& id) const { return index_.at(id); }
+
+  // DIR/runs/<id>.
+  std::filesystem::path folder(std::size_t i) const;
+  // How often run i runs: --repeat K times; a reference run once (its errors are the point, its
+  // timing is not compared with anything).
+  int repeats(std::size_t i) const;
+  // The outputs of repeat k (from 1) of run i: its folder, or folder/repeat-k when it repeats.
+  std::filesystem::path repeat_dir(std::size_t i, int k) const;
+  // The text of the run's overrides.json: its id, base case and the base's hash, its overrides
+  // and its number of repeats.
+  std::string request(std::size_t i) const;
+
+  // The pending runs in the order they are started: reference runs first, so that runs compared
+  // with them find them finished.
+  std::vector<std::size_t> queue(const std::vector<RunRecord>& records) const;
+  // A run waits for its reference; a reference run (the shared reference's check run) does not:
+  // its errors are computed again when the reference finishes.
+  bool startable(std::size_t i, const std::vector<RunRecord>& records) const;
+
+  // Whether run i was finished by an earlier invocation: its overrides.json matches the request
+  // and every repeat left a readable summary.json; then `record` is filled from them.
+  bool load_finished(std::size_t i, RunRecord& record) const;
+
+ private:
+  const SweepSpec& spec_;
+  const std::vector<SweepRun>& runs_;
+  const SweepOptions& options_;
+  std::map<std::string, std::size_t> index_;
+  std::map<std::filesystem::path, std::string> base_hash_;  // FNV-1a of each base case's text
+};
+
+// Fills status, reason and summary from a finished run's summary.json (a status other than ok
+// or diverged counts as diverged).
+void set_finished(RunRecord& record, Json summary);
+
+// The number `key` of a summary, else `fallback`.
+double json_number(const Json& summary, std::string_view key, double fallback);
+// The string `key` of a summary as it is, a number as summary.csv shows it; else empty.
+std::string json_text(const Json& summary, std::string_view key);
+
+// Validates every run's case (read_case of the run's base with its overrides) and, for every run
+// compared with a reference (and every reference run), its error probe. Throws InputError
+// "SWEEP:LINE: KEY: run ID: <the case's one-line error>".
+void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs);
+
+// The whole text of a file; empty if it cannot be read.
+std::string read_text(const std::filesystem::path& path);
+
+}  // namespace ricochet

@@ -1,0 +1,140 @@
+#include "solver/contact/bipotential_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ricochet {
+
+BipotentialContact make_bipotential_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+                                            const std::vector<std::vector<double>>& friction,
+                                            const std::vector<PrescribedDof>& prescribed,
+                                            const std::vector<BodyPair>& pairs) {
+  BipotentialContact b;
+  b.set = make_contact_set(model, obstacles, friction, prescribed, pairs);
+  const std::size_t n = b.set.candidates.size();
+  b.x_free.assign(n, {});
+  b.weight.assign(n, 0.0);
+  b.node_reaction.assign(model.num_nodes(), Vec2::Zero());
+  return b;
+}
+
+namespace {
+
+// Gauss-Seidel sweeps over the active contacts; each contact sees the current reactions of
+// the other contacts on its node through x = x_free + w (r_own + r_others). Returns the sweeps
+// taken and sets `converged`.
+template <bool kFriction>
+int gauss_seidel(const ContactSettings& set, BipotentialContact& b, bool& converged_out) {
+  ContactSet& c = b.set;
+  for (int sweep = 1; sweep <= set.max_sweeps; ++sweep) {
+    bool converged = true;
+    for (int k : c.active) {
+      const ContactCandidate& cc = c.candidates[k];
+      const Stencil& st = c.stencil[k];
+      const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+      const double w = b.weight[k];
+      LocalPair& r = c.reaction[k];
+      const Vec2 own = r.n * n + r.t * t;
+      // x = x_free + sum_j coef_j w_j (reactions on node j other than this contact's own).
+      LocalPair xf = b.x_free[k];
+      for (int j = 0; j < st.count; ++j) {
+        const Vec2 other = b.node_reaction[st.node[j]] - st.coef[j] * own;
+        xf.n += st.factor[j] * n.dot(other);
+        xf.t += st.factor[j] * t.dot(other);
+      }
+      const double rho = set.rho_factor / w;
+      LocalPair next;
+      if constexpr (kFriction) {
+        next = bipotential_update(r, xf, w, cc.friction_coeff, rho);
+      } else {
+        next = {std::max(0.0, r.n - rho * (xf.n + w * r.n)), 0.0};
+      }
+      const double change = std::hypot(next.n - r.n, next.t - r.t);
+      if (change > set.tolerance * std::hypot(next.n, next.t)) converged = false;
+      const Vec2 delta = (next.n - r.n) * n + (next.t - r.t) * t;
+      for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * delta;
+      r = next;
+    }
+    if (converged) {
+      converged_out = true;
+      return sweep;
+    }
+  }
+  converged_out = false;
+  return set.max_sweeps;
+}
+
+}  // namespace
+
+void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
+                   const ContactSettings& set, BipotentialContact& b, State& s) {
+  ContactSet& c = b.set;
+  const double dt = s.dt;
+  const bool position = set.level == ContactLevel::position;
+  // Free motion to t+dt: v_{n+1/2} without contact and the predicted position.
+  auto v_free = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt * s.a.segment<2>(2 * j); };
+  auto predicted = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j) + dt * v_free(j); };
+  update_boxes(c, predicted);
+  begin_step(c);
+  // Broad phase: only boundary nodes whose free motion ends behind an obstacle (or inside a
+  // master body) at t+dt. Gap and frame at the predicted position, frozen for the step.
+  for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
+    ObstacleContact oc;
+    if (!candidate_frame(model, obstacles, c, k, s.u, s.v_half, predicted, oc) || !(oc.gap < 0.0)) {
+      c.reaction[k] = {};
+      record(c, k, ContactStatus::open);
+      continue;
+    }
+    Stencil& st = c.stencil[k];
+    c.normal[k] = oc.normal;
+    const Vec2 t = oc.tangent();
+    // Relative free velocity and compliance of the stencil: w = sum_j coef_j^2 w_j.
+    Vec2 v_rel = Vec2::Zero();
+    double w = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      v_rel += st.coef[j] * v_free(node);
+      const double wj = position ? dt * dt / model.mass[2 * node] : dt / model.mass[2 * node];
+      st.factor[j] = st.coef[j] * wj;
+      w += st.coef[j] * st.factor[j];
+      b.node_reaction[node].setZero();
+    }
+    b.x_free[k] = position ? LocalPair{oc.gap, dt * t.dot(v_rel)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    b.weight[k] = w;
+    c.active.push_back(k);
+  }
+  if (c.active.empty()) {
+    finish_step(c, 0, true);
+    return;
+  }
+
+  // Warm start from the last step's reactions.
+  for (int k : c.active) {
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+    const Stencil& st = c.stencil[k];
+    const Vec2 r = c.reaction[k].n * n + c.reaction[k].t * t;
+    for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * r;
+  }
+  bool converged = true;
+  const int sweeps = c.any_friction ? gauss_seidel<true>(set, b, converged) : gauss_seidel<false>(set, b, converged);
+
+  // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
+  for (int k : c.active) {
+    const Stencil& st = c.stencil[k];
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+    const LocalPair r = c.reaction[k];
+    const Vec2 force = r.n * n + r.t * t;
+    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force / model.mass[2 * st.node[j]];
+    record(c, k, classify(r, c.candidates[k].friction_coeff));
+  }
+  // Work with the final reactions: dt R.v_n with v_n = v_{n-1/2} + dt/2 a_n, exactly the change
+  // of the half-step kinetic energy 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2 that R causes (a node
+  // stopped dead loses 1/2 m v^2); slip work -r_t times the slip increment dt t.v_{n+1/2} of the
+  // step (>= 0 by the cone). Between bodies both are sums over the stencil.
+  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
+  auto v_next = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt * s.a.segment<2>(2 * j); };
+  for (int k : c.active) record_work(c, k, dt, v_mid, true, v_next);
+  finish_step(c, sweeps, converged);
+}
+
+}  // namespace ricochet

@@ -1,0 +1,35 @@
+// The semi-explicit scheme's contact solve (Cros et al. 2010, Eqs. (4)-(5)): frictional contact
+// solved implicitly by the bi-potential method inside an explicit step. After evaluate() gives
+// the free accelerations, contact_phase() finds the reactions R at t+dt so that
+// U = U_lib + U_c, U_c = dt^2 M^-1 R, leaves no contact node inside an obstacle (position
+// level), and adds R/m to the accelerations. The candidates, frames and observables are the
+// shared contact module's (contact_set.hpp); this file holds the local problems and their
+// Gauss-Seidel solution only.
+#pragma once
+
+#include <vector>
+
+#include "solver/contact/contact_set.hpp"
+
+namespace ricochet {
+
+struct BipotentialContact {
+  ContactSet set;
+  // Per candidate, the local problem x = x_free + w r of the step.
+  std::vector<LocalPair> x_free;
+  std::vector<double> weight;            // w = local compliance
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> node_reaction;  // per node, sum of r in global axes [N]
+};
+
+// The contact set (make_contact_set) with the local problems' arrays allocated.
+BipotentialContact make_bipotential_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+                                            const std::vector<std::vector<double>>& friction,
+                                            const std::vector<PrescribedDof>& prescribed,
+                                            const std::vector<BodyPair>& pairs = {});
+
+// After evaluate(): solves the contact reactions of step n -> n+1 and adds them to s.a.
+// Allocates nothing.
+void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
+                   const ContactSettings& settings, BipotentialContact& c, State& s);
+
+}  // namespace ricochet

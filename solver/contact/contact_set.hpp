@@ -1,0 +1,223 @@
+// The contact module the three schemes share (docs/architecture.md, Contact): which boundary
+// nodes may touch what (candidates), where and in which frame each contact acts this step
+// (gap, normal, stencil), and every contact observable (forces, statuses, work, friction
+// dissipation, stored energy, iterations), recorded in one place. A scheme supplies only its
+// solve, the reactions of the step:
+//   - the semi-explicit bi-potential update at position level (bipotential_contact.hpp),
+//   - the implicit scheme's condensed problem (implicit.cpp),
+//   - the explicit penalty springs (penalty_contact.hpp).
+//
+// A step of any scheme runs the same frame:
+//   update_boxes(c, eval)                       the body pairs' bounding boxes at eval
+//   for each candidate k:
+//     candidate_frame(..., k, ...)              gap and frame (n, t) of k, its stencil
+//     ... the scheme's solve gives c.reaction[k] (r_n, r_t in that frame) ...
+//     record(c, k, status)                      the verdict: status, counts, force sums
+//   record_work(c, k, ...)                      per active contact, the work of its reaction
+//   finish_step(c, iterations, converged)       run totals
+//
+// Adding an observable means a field in ContactStep or ContactTotals and its computation in
+// record() / record_work() / finish_step() (contact_set.cpp); every scheme then has it.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "solver/contact/body_contact.hpp"
+#include "solver/schemes/central_difference.hpp"
+#include "solver/contact/coulomb.hpp"
+#include "solver/contact/obstacle.hpp"
+
+namespace ricochet {
+
+// Settings of the bi-potential solves (semi-explicit and implicit).
+// Which quantity x the local problem is written on (docs/background.md, Rigid obstacle: the
+// closed-form fixed point; an open question of Cros et al. 2010, Eq. (5)).
+enum class ContactLevel {
+  position,  // x = (gap at t+dt, slip increment over the step), w = dt^2/m: no penetration at t+dt
+  velocity,  // x = relative velocity v_{n+1/2}, w = dt/m, active when the predicted gap <= 0
+};
+
+struct ContactSettings {
+  ContactLevel level = ContactLevel::position;
+  double rho_factor = 1.0;    // rho = rho_factor / w per contact (1 = inverse local compliance)
+  double tolerance = 1e-10;   // Gauss-Seidel stops when every |dr| <= tolerance |r|
+  int max_sweeps = 200;       // Gauss-Seidel sweep cap per step
+};
+
+// Settings of the penalty springs (penalty_contact.hpp).
+struct PenaltySettings {
+  double scale_factor = 0.1;  // f_si (LS-DYNA SLSFAC default) [-]
+  // LS-DYNA's SOFT = 1 (soft constraint): with soft_scale > 0 every spring is at least
+  //   k1 = soft_scale m* / (2 soft_dt^2),
+  // m* the smallest nodal mass of the contact (the slave node; between bodies also the master
+  // segment's nodes), soft_dt the step the run starts with. k = max(f_si k_bulk, k1): for a
+  // soft body against a stiff one, whose bulk-modulus springs are too soft to stop it. k1 keeps
+  // every spring's own step limit 2 sqrt(m*/(2 k1)) >= 2 soft_dt / sqrt(soft_scale).
+  double soft_scale = 0.0;  // SOFSCL; 0 = SOFT = 0 (bulk-modulus springs only) [-]
+  double soft_dt = 0.0;     // [s], > 0 when soft_scale > 0
+};
+
+// One potential contact: a boundary node of a body facing an obstacle (pair = -1), or a
+// boundary node of a pair's slave body facing its master body's surface (obstacle = -1).
+struct ContactCandidate {
+  int node = 0;
+  int obstacle = 0;
+  double friction_coeff = 0.0;  // mu of this body-obstacle (or body-body) pair [-]
+  int pair = -1;                // index into the body pairs; -1 for a rigid obstacle
+};
+
+// Results of the last step.
+struct ContactStep {
+  int active = 0, stick = 0, slip = 0;  // contacts with a reaction, and how they hold
+  int status_changes = 0;               // candidates whose status (open, stick, slip) changed
+  int iterations = 0;                   // sweeps of the solve (bi-potential schemes)
+  bool converged = true;                // the solve met its tolerance
+  double normal_force = 0.0;            // sum r_n [N]
+  double tangential_force = 0.0;        // sum r_t along each contact's tangent [N]
+  double stored_energy = 0.0;           // energy held by the contact (penalty springs) [J]
+};
+
+// Accumulated over the run.
+struct ContactTotals {
+  double friction_dissipation = 0.0;  // [J]
+  double contact_work = 0.0;          // work of all contact reactions on the bodies [J]
+  double contact_work_normal = 0.0;   // the part of contact_work done by the normal reactions [J]
+  long steps_with_contact = 0;
+  long iterations_total = 0;          // over the steps with contact
+  int iterations_max = 0;
+  long unconverged_steps = 0;         // steps whose solve hit its iteration cap
+  long status_changes = 0;            // sum of ContactStep::status_changes
+};
+
+// The candidates, their per-step geometry and reactions, and the observables.
+struct ContactSet {
+  std::vector<ContactCandidate> candidates;
+  bool any_friction = false;
+  // Contact between bodies (body_contact.hpp): per pair the master's surface and, per step, its
+  // bounding box.
+  std::vector<Surface> surfaces;
+  std::vector<Box2> boxes;
+  // Per candidate.
+  std::vector<Stencil> stencil;          // the nodes its reaction acts on (rigid obstacles: the node alone)
+  std::vector<int> segment;              // master segment of the last step (-1 none)
+  // The outward normal of the step's frame (t = (n_y, -n_x)), frozen for the step: `reaction`
+  // is expressed in it.
+  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;
+  std::vector<LocalPair> reaction;       // r of the step (r_n, r_t) [N]
+  std::vector<ContactStatus> status;     // of the last step
+  std::vector<int> active;               // candidates with a reaction this step, ascending
+
+  ContactStep last;
+  ContactTotals total;
+};
+
+// Candidates: the boundary nodes of each body paired with each obstacle, then the boundary
+// nodes of each pair's slave body, less nodes with a prescribed DOF. `friction[b][o]` is mu of
+// body b against obstacle o. Every per-candidate array is allocated.
+ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obstacles,
+                            const std::vector<std::vector<double>>& friction,
+                            const std::vector<PrescribedDof>& prescribed,
+                            const std::vector<BodyPair>& pairs = {});
+
+// The body pairs' bounding boxes at positions eval(j), grown by the longest master segment.
+template <class Eval>
+void update_boxes(ContactSet& c, const Eval& eval) {
+  for (std::size_t q = 0; q < c.surfaces.size(); ++q)
+    c.boxes[q] = surface_box(c.surfaces[q], eval, c.surfaces[q].max_length);
+}
+
+// Candidate k's gap and frame for the step, with its stencil: for a rigid obstacle the
+// step_frame() of the node from its start position X + u_start to eval(node); for a body pair
+// the segment choice of body_contact.hpp (start positions X + u_start, velocities v_start,
+// evaluation positions eval(j)). Returns false (and clears the tracked segment) when a pair's
+// node faces no master segment.
+template <class Eval>
+bool candidate_frame(const Model& model, const std::vector<Obstacle>& obstacles, ContactSet& c, int k,
+                     const Eigen::VectorXd& u_start, const Eigen::VectorXd& v_start, const Eval& eval,
+                     ObstacleContact& out) {
+  const ContactCandidate& cc = c.candidates[k];
+  if (cc.pair < 0) {
+    out = step_frame(obstacles[cc.obstacle], model.ref.col(cc.node) + u_start.segment<2>(2 * cc.node), eval(cc.node));
+    return true;
+  }
+  const Surface& surf = c.surfaces[cc.pair];
+  if (!c.boxes[cc.pair].contains(eval(cc.node))) {
+    c.segment[k] = -1;
+    return false;
+  }
+  auto start = [&](int j) -> Vec2 { return model.ref.col(j) + u_start.segment<2>(2 * j); };
+  auto vel = [&](int j) -> Vec2 { return v_start.segment<2>(2 * j); };
+  const NodeSegment ns = find_segment(surf, cc.node, c.segment[k], start, eval, vel);
+  c.segment[k] = ns.segment;
+  if (ns.segment < 0) return false;
+  const SurfaceSegment& sg = surf.segments[ns.segment];
+  Stencil& st = c.stencil[k];
+  st.count = 3;
+  st.node = {cc.node, sg.a, sg.b};
+  st.coef = {1.0, -(1.0 - ns.xi), -ns.xi};
+  out = {ns.gap, ns.normal};
+  return true;
+}
+
+// Start of a step's bookkeeping: the last-step results cleared.
+inline void begin_step(ContactSet& c) {
+  c.active.clear();
+  c.last = ContactStep{};
+}
+
+// The step's verdict on candidate k: its status (open, stick, slip) with its final reaction in
+// c.reaction[k]. Counts the status change, and for a closed contact the stick/slip counts and
+// the force sums. Call it once per candidate and step; the closed ones in ascending order.
+inline void record(ContactSet& c, int k, ContactStatus status) {
+  c.last.status_changes += status != c.status[k];
+  c.status[k] = status;
+  if (status == ContactStatus::open) return;
+  c.last.stick += status == ContactStatus::stick;
+  c.last.slip += status == ContactStatus::slip;
+  c.last.normal_force += c.reaction[k].n;
+  c.last.tangential_force += c.reaction[k].t;
+}
+
+// Work of active contact k's reaction F = r_n n + r_t t over the step: scale * sum_j coef_j F .
+// work_motion(j) over its stencil (the normal part likewise), and with `slip` its slip work
+// -r_t scale t . sum_j coef_j slip_motion(j) added to the friction dissipation. The explicit
+// schemes measure the work on v_n dt (scale dt, work_motion = v_n) and the slip on
+// v_{n+1/2} dt; the implicit one on the step's displacement (scale 1, both u_{n+1} - u_n).
+template <class WorkMotion, class SlipMotion>
+void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_motion, bool slip,
+                 const SlipMotion& slip_motion) {
+  const Stencil& st = c.stencil[k];
+  const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+  const LocalPair r = c.reaction[k];
+  const Vec2 force = r.n * n + r.t * t;
+  Vec2 relative = Vec2::Zero();
+  double work = 0.0, work_normal = 0.0;
+  for (int j = 0; j < st.count; ++j) {
+    const int node = st.node[j];
+    const Vec2 d = work_motion(node);
+    if (slip) relative += st.coef[j] * slip_motion(node);
+    work += (st.coef[j] * force).dot(d);
+    work_normal += st.coef[j] * r.n * n.dot(d);
+  }
+  if (slip) c.total.friction_dissipation -= r.t * scale * t.dot(relative);
+  c.total.contact_work += scale * work;
+  c.total.contact_work_normal += scale * work_normal;
+}
+
+// End of a step: the active count and the run totals. `iterations` and `converged` describe the
+// step's solve (0 and true for the penalty springs).
+void finish_step(ContactSet& c, int iterations, bool converged);
+
+// Largest depth of any candidate node behind its obstacle, or inside its pair's master body
+// (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this.
+double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
+                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
+                   const Eigen::VectorXd& u);
+inline double penetration(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
+                          const Eigen::VectorXd& u) {
+  return penetration(model, obstacles, c.surfaces, c.candidates, u);
+}
+
+}  // namespace ricochet

@@ -1,0 +1,206 @@
+#include "solver/contact/penalty_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
+namespace ricochet {
+
+double penalty_bulk_modulus(const Material& material) {
+  return std::visit(
+      [](const auto& m) {
+        using T = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<T, StVenantKirchhoff>) {
+          return m.lambda_3d + 2.0 * m.shear_modulus / 3.0;
+        } else {
+          return m.lambda + 2.0 * m.shear_modulus / 3.0;  // NeoHookean::lambda is the 3D value
+        }
+      },
+      material);
+}
+
+namespace {
+
+// k_s / f_si = K l^2 e / A_c of one boundary segment (its length l, its cell's area A_c).
+double segment_stiffness_per_scale(const Model& model, const BodyInfo& body, const BoundaryEdge& e, double bulk) {
+  const double l2 = (model.ref.col(e.b) - model.ref.col(e.a)).squaredNorm();
+  return bulk * l2 * body.thickness / e.cell_area;
+}
+
+// Per node of the model: k_i / f_si = sum over its boundary segments of k_s / (2 f_si).
+std::vector<double> nodal_stiffness_per_scale(const Model& model) {
+  std::vector<double> k(model.num_nodes(), 0.0);
+  for (const BodyInfo& body : model.bodies) {
+    const double bulk = penalty_bulk_modulus(body.material);
+    for (const BoundaryEdge& e : body.boundary_edges) {
+      const double ks = segment_stiffness_per_scale(model, body, e, bulk);
+      k[e.a] += 0.5 * ks;
+      k[e.b] += 0.5 * ks;
+    }
+  }
+  return k;
+}
+
+}  // namespace
+
+PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+                                    const std::vector<std::vector<double>>& friction,
+                                    const std::vector<PrescribedDof>& prescribed,
+                                    const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
+  if (!(settings.scale_factor > 0.0))
+    throw std::invalid_argument("penalty contact: scale factor f_si must be > 0");
+  PenaltyContact p;
+  p.set = make_contact_set(model, obstacles, friction, prescribed, pairs);
+  const ContactSet& c = p.set;
+  p.scale_factor = settings.scale_factor;
+  const std::vector<double> k_node = nodal_stiffness_per_scale(model);
+  // Per pair and master segment (the master's boundary edges, in order), f_si k_s; per pair the
+  // smallest master boundary node mass.
+  p.segment_stiffness.resize(c.surfaces.size());
+  std::vector<double> m_master(c.surfaces.size()), k_max(c.surfaces.size(), 0.0);
+  for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
+    const BodyInfo& master = model.bodies[c.surfaces[q].body];
+    const double bulk = penalty_bulk_modulus(master.material);
+    for (const BoundaryEdge& e : master.boundary_edges) {
+      const double ks = segment_stiffness_per_scale(model, master, e, bulk);
+      p.segment_stiffness[q].push_back(settings.scale_factor * ks);
+      k_max[q] = std::max(k_max[q], ks);
+    }
+    m_master[q] = std::numeric_limits<double>::infinity();
+    for (int j : c.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
+  }
+  if (settings.soft_scale > 0.0) {
+    if (!(settings.soft_dt > 0.0)) throw std::logic_error("penalty contact: soft_scale > 0 needs soft_dt > 0");
+    p.soft_factor = settings.soft_scale / (2.0 * settings.soft_dt * settings.soft_dt);
+  }
+  const std::size_t n = c.candidates.size();
+  p.stiffness.resize(n);
+  p.bulk_stiffness.resize(n);
+  p.pair_compliance.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const ContactCandidate& cc = c.candidates[i];
+    double k = k_node[cc.node];
+    double m_star = model.mass[2 * cc.node];
+    if (cc.pair >= 0) {
+      k = std::min(k, k_max[cc.pair]);  // the stiffest spring the node can meet (for the step)
+      p.pair_compliance[i] = 1.0 / model.mass[2 * cc.node] + 1.0 / m_master[cc.pair];
+      m_star = std::min(m_star, m_master[cc.pair]);
+    }
+    p.bulk_stiffness[i] = settings.scale_factor * k;
+    p.stiffness[i] = std::max(p.bulk_stiffness[i], p.soft_factor * m_star);
+    if (!(p.bulk_stiffness[i] > 0.0))
+      throw std::logic_error("penalty contact: boundary node " + std::to_string(cc.node) + " has no boundary segment");
+  }
+  p.last_position.assign(n, Vec2::Zero());
+  return p;
+}
+
+double penalty_critical_dt(const Model& model, const PenaltyContact& p) {
+  const std::vector<ContactCandidate>& cand = p.set.candidates;
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < cand.size(); ++i)
+    dt = std::min(dt, cand[i].pair < 0 ? 2.0 * std::sqrt(model.mass[2 * cand[i].node] / p.stiffness[i])
+                                       : 2.0 / std::sqrt(p.stiffness[i] * p.pair_compliance[i]));
+  return dt;
+}
+
+double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p) {
+  const double de = model.critical_dt, dp = penalty_critical_dt(model, p);
+  if (!std::isfinite(dp)) return de;
+  return 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp));
+}
+
+double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety) {
+  return safety * penalty_combined_critical_dt(model, p);
+}
+
+void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, PenaltyContact& p, State& s) {
+  ContactSet& c = p.set;
+  const int count = static_cast<int>(c.candidates.size());
+  begin_step(c);
+  p.normal_energy = p.tangential_energy = 0.0;
+  double depth = 0.0;
+  const bool first = !p.initialized;
+  p.initialized = true;
+
+  auto position = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j); };
+  update_boxes(c, position);
+
+  for (int k = 0; k < count; ++k) {
+    const ContactCandidate& cc = c.candidates[k];
+    const Vec2 x = position(cc.node);
+    Stencil& st = c.stencil[k];
+    // The frame at u_n (start and evaluation positions coincide).
+    ObstacleContact oc;
+    if (!candidate_frame(model, obstacles, c, k, s.u, s.v_half, position, oc)) {
+      oc.gap = std::numeric_limits<double>::infinity();  // facing no segment: open
+      st.count = 1;
+    }
+    const double g = oc.gap;
+    const Vec2 t = oc.tangent();
+    c.normal[k] = oc.normal;
+    // Between bodies: f_si min(k_slave, k_s) of the segment met this step, at least the soft
+    // constraint's k1 of the stencil's lightest node.
+    double stiff = p.stiffness[k];
+    if (cc.pair >= 0 && c.segment[k] >= 0) {
+      stiff = std::min(p.bulk_stiffness[k], p.segment_stiffness[cc.pair][c.segment[k]]);
+      if (p.soft_factor > 0.0) {
+        double m_star = model.mass[2 * st.node[0]];
+        for (int j = 1; j < st.count; ++j) m_star = std::min(m_star, model.mass[2 * st.node[j]]);
+        stiff = std::max(stiff, p.soft_factor * m_star);
+      }
+    }
+    const double fn = g < 0.0 ? -stiff * g : 0.0;
+    double ft = 0.0;
+    ContactStatus status = fn > 0.0 ? ContactStatus::slip : ContactStatus::open;
+    if (cc.friction_coeff > 0.0) {
+      // Elastic predictor on the slip increment of the step, then the return map onto
+      // |f_t| <= mu f_n (f_n = 0 when open, which returns the spring to zero).
+      // For a line t . x_{n-1} is the value stored last step, bit for bit; for a curved
+      // obstacle it projects the increment on the current tangent.
+      // Between bodies the increment is the relative one, dt t . sum_j coef_j v_{n-1/2,j}.
+      double ds = 0.0;
+      if (!first && cc.pair < 0) {
+        ds = t.dot(x) - t.dot(p.last_position[k]);
+      } else if (!first) {
+        Vec2 dv = Vec2::Zero();
+        for (int j = 0; j < st.count; ++j) dv += st.coef[j] * s.v_half.segment<2>(2 * st.node[j]);
+        ds = s.dt * t.dot(dv);
+      }
+      p.last_position[k] = x;
+      const double old = c.reaction[k].t;
+      const double trial = old - stiff * ds;
+      const double cap = cc.friction_coeff * fn;
+      if (std::abs(trial) <= cap) {
+        ft = trial;
+        if (fn > 0.0) status = ContactStatus::stick;
+      } else {
+        ft = std::copysign(cap, trial);
+        c.total.friction_dissipation += (trial - ft) * (old + ft) / (2.0 * stiff);
+      }
+    }
+    c.reaction[k] = {fn, ft};
+    record(c, k, status);
+    if (!(fn > 0.0)) continue;
+
+    depth = std::max(depth, -g);
+    c.active.push_back(k);
+    const Vec2 force = fn * oc.normal + ft * t;
+    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force * model.inv_mass[2 * st.node[j]];
+    p.normal_energy += 0.5 * stiff * g * g;
+    p.tangential_energy += ft * ft / (2.0 * stiff);
+  }
+  c.last.stored_energy = p.normal_energy + p.tangential_energy;
+  p.penetration = depth;
+  // Work of the penalty forces, dt F . v_n with v_n = v_{n-1/2} + dt/2 a_n and the final a_n:
+  // the change of the half-step kinetic energy that F causes (as contact_phase records it). The
+  // friction dissipation is the return map's, above.
+  const double dt = s.dt;
+  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
+  for (int k : c.active) record_work(c, k, dt, v_mid, false, v_mid);
+  finish_step(c, 0, true);
+}
+
+}  // namespace ricochet

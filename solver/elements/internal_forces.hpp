@@ -1,0 +1,48 @@
+// Internal nodal forces f_int(u) of every element block: gather -> F = I + ue^T dN/dX -> P(F)
+// -> fe = vol dN/dX P^T -> scatter. Flat DOF arrays: u, v, f are 2n, interleaved (x0, y0, x1..).
+#pragma once
+
+#include <cstdint>
+
+#include "solver/model/model.hpp"
+#include "solver/materials/stress.hpp"
+
+namespace ricochet {
+
+// What the force pass tracks of the stresses (stress.hpp).
+struct StressTracking {
+  const std::uint8_t* contact_cell = nullptr;  // per global cell, 1 on a contact boundary; never null
+  StressMeasure measure = StressMeasure::cauchy;
+  double threshold = 0.0;  // [Pa^2]: points that cannot exceed it are not ranked (0: rank all)
+};
+
+struct ForceTotals {
+  double strain_energy = 0.0;     // sum vol * W(F) [J]; only when asked for
+  double hourglass_energy = 0.0;  // stored 1/2 c q.q of stiffness-form hourglass control [J]; only when asked for
+  double hourglass_power = 0.0;   // sum Q . qdot of viscous hourglass control [W]; always
+  double min_jacobian = 1e300;    // smallest det F at any integration point [-]
+  StressPeaks stress;             // only when asked for (StressTracking): the largest values above its
+                                  // threshold (a cell index of -1: none above it)
+};
+
+// Overwrites f_int. `v` (2n) is the velocity the viscous hourglass forces use.
+// With `with_energy` the strain and stored hourglass energies are summed as well. With
+// `stress` the pass also ranks the von Mises equivalents of stress->measure at every
+// integration point above stress->threshold (ForceTotals::stress; the cost:
+// bench/bench_element_forces.cpp).
+ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
+                            bool with_energy, const StressTracking* stress = nullptr);
+
+// Largest von Mises stress of `measure` over each cell's integration points, per global cell
+// [Pa]. `out` has model.num_cells() entries.
+void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out);
+
+// The peaks internal_forces() tracks, by a stress pass alone (for the implicit scheme, whose
+// force passes are Newton iterates). `contact_cell` as `stress_cells` above; null: no cell is
+// on a contact boundary.
+StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress);
+
+// The largest von Mises stress of each measure over all cells and integration points [Pa].
+VonMises2 von_mises_maxima(const Model& model, const double* u);
+
+}  // namespace ricochet

@@ -1,0 +1,115 @@
+// The assembled model: global node arrays, lumped masses and element blocks whose reference
+// geometry (shape-function gradients, volumes, hourglass vectors) is computed once.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "solver/materials/material.hpp"
+#include "solver/model/mesh.hpp"
+
+namespace ricochet {
+
+enum class QuadElement { full_2x2, one_point_hourglass };
+enum class HourglassForm { viscous, stiffness };
+
+// Flanagan-Belytschko hourglass control of one-point Q4 (docs/background.md, Hourglass control),
+// with q = sum_I gamma_I a_I (a = velocity for viscous, displacement for stiffness), Q = c q and
+// nodal forces f_I = gamma_I Q:
+//   viscous:   c = coeff * rho * c_p * t * sqrt(A0)           [kg/s]
+//   stiffness: c = coeff * rho * c_p^2 * t * A0 * (B:B) / 2   [N/m]
+struct HourglassControl {
+  HourglassForm form = HourglassForm::viscous;
+  double coeff = 0.1;  // [-]
+};
+
+struct BodyInput {
+  std::string name;
+  Mesh mesh;
+  Material material;
+  QuadElement quad_element = QuadElement::full_2x2;
+  HourglassControl hourglass;
+  double thickness = 1.0;               // [m]
+  Vec2 initial_velocity = Vec2::Zero();  // [m/s]
+};
+
+using Grad4 = Eigen::Matrix<double, 4, 2>;  // rows = element nodes, cols = dN/dX, dN/dY [1/m]
+using Grad3 = Eigen::Matrix<double, 3, 2>;
+
+struct Q4FullGeom {
+  std::array<Grad4, 4> dndx;  // at the 2x2 Gauss points
+  std::array<double, 4> vol;  // Gauss weight * det J0 * thickness [m^3]
+};
+struct Q4HourglassGeom {
+  Grad4 dndx;                  // mean (= centroid) gradients
+  Eigen::Vector4d gamma;       // FB hourglass vector, orthogonal to linear fields [-]
+  double vol = 0.0;            // A0 * thickness [m^3]
+  double hourglass_coeff = 0.0;  // c of HourglassControl: [kg/s] viscous or [N/m] stiffness
+};
+struct T3Geom {
+  Grad3 dndx;
+  double vol = 0.0;  // A0 * thickness [m^3]
+};
+
+// One body's cells of one formulation. `first_cell` is the index of the block's first cell in
+// the global cell numbering (bodies in order; in each body its quads, then its triangles).
+template <int N, class Geom>
+struct ElementBlock {
+  int body = 0;
+  int first_cell = 0;
+  Material material;
+  std::vector<std::array<int, N>> conn;  // global node indices
+  std::vector<Geom> geom;
+};
+using Q4FullBlock = ElementBlock<4, Q4FullGeom>;
+struct Q4HourglassBlock : ElementBlock<4, Q4HourglassGeom> {
+  HourglassForm form = HourglassForm::viscous;
+};
+using T3Block = ElementBlock<3, T3Geom>;
+
+struct BodyInfo {
+  std::string name;
+  int first_node = 0, num_nodes = 0;
+  int first_cell = 0, num_cells = 0;
+  double thickness = 0.0;
+  QuadElement quad_element = QuadElement::full_2x2;
+  Material material;
+  std::vector<int> boundary_nodes;  // global indices of nodes on an edge used by one cell, sorted
+  std::vector<BoundaryEdge> boundary_edges;  // boundary_edges() of the body's mesh, global indices
+};
+
+struct Model {
+  PlaneMode plane = PlaneMode::stress;
+  Eigen::Matrix2Xd ref;         // 2 x n reference coordinates, all bodies [m]
+  Eigen::VectorXd mass;         // lumped mass per DOF (2n, x and y equal) [kg]
+  Eigen::VectorXd inv_mass;     // 1/mass per DOF [1/kg]
+  Eigen::VectorXd initial_velocity;  // per DOF [m/s]
+  Vec2 gravity = Vec2::Zero();  // body acceleration [m/s^2]
+  std::vector<BodyInfo> bodies;
+  std::vector<Q4FullBlock> q4_full;
+  std::vector<Q4HourglassBlock> q4_hourglass;
+  std::vector<T3Block> t3;
+  std::vector<double> cell_dt;  // per global cell: L_e / c_p, the critical-step estimate [s]
+  double critical_dt = 0.0;     // min of cell_dt [s]
+  int critical_cell = -1;
+
+  int num_nodes() const { return static_cast<int>(ref.cols()); }
+  int num_dofs() const { return 2 * num_nodes(); }
+  int num_cells() const { return static_cast<int>(cell_dt.size()); }
+};
+
+// Builds the model; throws std::invalid_argument for a cell with non-positive area or a
+// non-convex quadrilateral (naming the body and cell), or non-positive thickness/density.
+Model build_model(const std::vector<BodyInput>& bodies, PlaneMode plane, const Vec2& gravity);
+
+// Critical-step estimates of one reference cell (docs/background.md, Critical time step): Q4 uses
+// L_e = sqrt(2) A / sqrt(d13^2 + d24^2) (Flanagan-Belytschko bound, diagonals d13, d24);
+// T3 uses the analogous bound of the lumped constant-strain triangle,
+// L_e = sqrt(2/3) 2 A / sqrt(eig_max(sum over edges e e^T)) (a/sqrt(3) for an equilateral
+// triangle of side a; the smallest altitude, 2 A / longest edge, overestimates the stable
+// step by up to 27 %). [m]
+double q4_characteristic_length(const Eigen::Matrix<double, 2, 4>& x);
+double t3_characteristic_length(const Eigen::Matrix<double, 2, 3>& x);
+
+}  // namespace ricochet

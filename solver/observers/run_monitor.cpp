@@ -1,0 +1,312 @@
+#include "solver/observers/run_monitor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "solver/observers/observers.hpp"
+
+namespace ricochet {
+
+namespace {
+
+// Steps at which the history is sampled: k * interval rounded to the nearest step, and the last.
+std::vector<long> sample_steps(const RunSettings& s, long planned) {
+  std::vector<long> steps;
+  if (s.sample_interval <= 0.0) {
+    for (long n = 0; n <= planned; ++n) steps.push_back(n);
+    return steps;
+  }
+  for (long k = 0;; ++k) {
+    const long n = std::lround(static_cast<double>(k) * s.sample_interval / s.dt);
+    if (n > planned) break;
+    if (steps.empty() || n > steps.back()) steps.push_back(n);
+  }
+  if (steps.back() != planned) steps.push_back(planned);
+  return steps;
+}
+
+// z angular momentum of all nodes about their common centre of mass at t_n [kg m^2/s]:
+// L = sum m_i (x_i - x_c) x (v_i - v_c), x = X + u, v = v_n. Taken about the current centre of
+// mass so that it is the spin alone (no orbital part from the translation), and computed in
+// two passes (centre first) rather than as sum m x x v - M x_c x v_c, which would cancel
+// digits for a body far from the origin. O(nodes), run at sample steps only.
+double angular_momentum(const Model& model, const State& s) {
+  double mass = 0.0;
+  Vec2 mx = Vec2::Zero(), mv = Vec2::Zero();
+  for (int i = 0; i < model.num_nodes(); ++i) {
+    const double m = model.mass[2 * i];
+    mass += m;
+    mx += m * (model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]));
+    mv += m * Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1));
+  }
+  if (!(mass > 0.0)) return 0.0;
+  const Vec2 xc = mx / mass, vc = mv / mass;
+  double L = 0.0;
+  for (int i = 0; i < model.num_nodes(); ++i) {
+    const Vec2 r = model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]) - xc;
+    const Vec2 w = Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1)) - vc;
+    L += model.mass[2 * i] * (r.x() * w.y() - r.y() * w.x());
+  }
+  return L;
+}
+
+
+// Cells with a node on a contact boundary: the candidate nodes, and the boundary nodes of the
+// master bodies of body pairs.
+std::vector<std::uint8_t> contact_boundary_cells(const Model& model, const RunSettings& settings,
+                                                 const std::vector<ContactCandidate>& candidates) {
+  std::vector<std::uint8_t> node(model.num_nodes(), 0), cell(model.num_cells(), 0);
+  for (const ContactCandidate& c : candidates) node[c.node] = 1;
+  for (const BodyPair& bp : settings.body_pairs)
+    if (bp.master >= 0 && bp.master < static_cast<int>(model.bodies.size()))
+      for (int n : model.bodies[bp.master].boundary_nodes) node[n] = 1;
+  auto mark = [&](const auto& block) {
+    for (std::size_t e = 0; e < block.conn.size(); ++e)
+      for (int n : block.conn[e])
+        if (node[n]) cell[block.first_cell + e] = 1;
+  };
+  for (const auto& b : model.q4_full) mark(b);
+  for (const auto& b : model.q4_hourglass) mark(b);
+  for (const auto& b : model.t3) mark(b);
+  return cell;
+}
+
+// Body, element within the body and current centroid of a global cell.
+void locate_cell(const Model& model, const State& s, int cell, StressPeak& p) {
+  p.cell = cell;
+  auto find = [&](const auto& block) {
+    const int k = cell - block.first_cell;
+    if (k < 0 || k >= static_cast<int>(block.conn.size())) return false;
+    Vec2 c = Vec2::Zero();
+    for (int n : block.conn[k]) c += model.ref.col(n) + Vec2(s.u[2 * n], s.u[2 * n + 1]);
+    c /= static_cast<double>(block.conn[k].size());
+    p.x = c.x();
+    p.y = c.y();
+    p.body = block.body;
+    p.element = cell - model.bodies[block.body].first_cell;
+    return true;
+  };
+  for (const auto& b : model.q4_full)
+    if (find(b)) return;
+  for (const auto& b : model.q4_hourglass)
+    if (find(b)) return;
+  for (const auto& b : model.t3)
+    if (find(b)) return;
+}
+
+// What a history row is made of at a sample step.
+struct HistoryInputs {
+  const State& s;
+  const Energies& e;
+  const ContactStep& c;     // the contact set's last step
+  const ContactTotals& ct;  // and its run totals
+  double energy_error = 0.0;      // [-]
+  Vec2 momentum = Vec2::Zero();   // [kg m/s]
+  double von_mises = 0.0;         // [Pa]
+  double penetration = 0.0;       // [m]
+  double angular_momentum = 0.0;  // [kg m^2/s]
+};
+
+// The history's columns before the probes', in order, each with its value: the one definition
+// of a history row (docs/outputs.md, history.csv). fn(name, value) is called per column; with
+// x null only the names are wanted (the values are 0).
+template <class Fn>
+void history_fields(const HistoryInputs* x, Fn&& fn) {
+  auto of = [x](auto get) { return x ? get(*x) : 0.0; };
+  using X = HistoryInputs;
+  fn("time", of([](const X& h) { return h.s.time; }));
+  fn("kinetic_energy", of([](const X& h) { return h.e.kinetic; }));
+  fn("strain_energy", of([](const X& h) { return h.e.strain; }));
+  fn("hourglass_energy", of([](const X& h) { return h.e.hourglass; }));
+  fn("external_work", of([](const X& h) { return h.e.external_work; }));
+  fn("friction_dissipation", of([](const X& h) { return h.e.friction_dissipation; }));
+  fn("total_energy", of([](const X& h) { return h.e.total(); }));
+  fn("energy_error", of([](const X& h) { return h.energy_error; }));
+  fn("momentum_x", of([](const X& h) { return h.momentum.x(); }));
+  fn("momentum_y", of([](const X& h) { return h.momentum.y(); }));
+  fn("von_mises_max", of([](const X& h) { return h.von_mises; }));
+  fn("penetration_max", of([](const X& h) { return h.penetration; }));
+  fn("contact_nodes", of([](const X& h) { return static_cast<double>(h.c.active); }));
+  fn("normal_force", of([](const X& h) { return h.c.normal_force; }));
+  fn("tangential_force", of([](const X& h) { return h.c.tangential_force; }));
+  fn("contact_work", of([](const X& h) { return h.ct.contact_work; }));
+  fn("contact_stick", of([](const X& h) { return static_cast<double>(h.c.stick); }));
+  fn("contact_slip", of([](const X& h) { return static_cast<double>(h.c.slip); }));
+  fn("contact_iterations", of([](const X& h) { return static_cast<double>(h.c.iterations); }));
+  fn("contact_energy", of([](const X& h) { return h.c.stored_energy; }));
+  fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
+  fn("contact_work_normal", of([](const X& h) { return h.ct.contact_work_normal; }));
+  fn("contact_status_changes", of([](const X& h) { return static_cast<double>(h.c.status_changes); }));
+}
+
+}  // namespace
+
+std::size_t History::column(const std::string& name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  if (it == columns.end()) throw std::out_of_range("no history column '" + name + "'");
+  return static_cast<std::size_t>(it - columns.begin());
+}
+
+std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
+  std::vector<std::string> c;
+  history_fields(nullptr, [&c](const char* name, double) { c.emplace_back(name); });
+  for (const auto& p : probes)
+    for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
+  return c;
+}
+
+RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact)
+    : model_(model), settings_(settings), result_(result), contact_(contact) {
+  if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
+    throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
+  result.dt = settings.dt;
+  planned_ = static_cast<long>(std::ceil(settings.end_time / settings.dt - 1e-9));
+  result.planned_steps = planned_;
+  samples_ = sample_steps(settings, planned_);
+  for (double t : settings.field_times) {
+    const long n = std::lround(t / settings.dt);
+    if (n >= 0 && n <= planned_) field_steps_.push_back(n);  // times after the end are skipped
+  }
+  std::sort(field_steps_.begin(), field_steps_.end());
+  field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
+  result.history.columns = history_columns(settings.probes);
+  result.history.values.reserve(samples_.size() * result.history.columns.size());
+  result.fields.reserve(field_steps_.size());
+  monitor_every_ = std::max(1, settings.monitor_every);
+  contact_cell_ = contact_boundary_cells(model, settings, contact.candidates);
+  tracking_.contact_cell = contact_cell_.data();
+  tracking_.measure = settings.stress_measure;
+  result.stress_measure = settings.stress_measure;
+  result.total_mass = 0.5 * model.mass.sum();
+  result.contact_candidates = static_cast<int>(contact.candidates.size());
+  wall0_ = std::chrono::steady_clock::now();
+  cpu0_ = std::clock();
+}
+
+const StressTracking* RunMonitor::stress_tracking(long n) {
+  const bool sample = next_sample_ < samples_.size() && samples_[next_sample_] == n;
+  if (!sample && !settings_.stress_every_step) return nullptr;
+  const double peak = result_.von_mises_interior_peak.value;
+  tracking_.threshold = sample ? 0.0 : peak * peak;
+  return &tracking_;
+}
+
+void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
+  last_peaks_ = peaks;
+  const double all = std::sqrt(peaks.all), interior = std::sqrt(peaks.interior);
+  if (peaks.all_cell >= 0 && all > result_.von_mises_peak.value) {
+    StressPeak& p = result_.von_mises_peak;
+    p.value = all;
+    p.time = s.time;
+    locate_cell(model_, s, peaks.all_cell, p);
+    result_.von_mises_max = p.value;
+    result_.von_mises_max_time = p.time;
+  }
+  if (peaks.interior_cell >= 0 && interior > result_.von_mises_interior_peak.value) {
+    StressPeak& p = result_.von_mises_interior_peak;
+    p.value = interior;
+    p.time = s.time;
+    locate_cell(model_, s, peaks.interior_cell, p);
+  }
+}
+
+void RunMonitor::contact_step(double t_begin, double dt) {
+  const ContactStep& c = contact_.last;
+  result_.contact_impulse_normal += c.normal_force * dt;
+  result_.contact_impulse_tangential += c.tangential_force * dt;
+  if (c.active > 0) {
+    if (result_.contact_first_time < 0.0) result_.contact_first_time = t_begin;
+    result_.contact_last_time = t_begin + dt;
+  }
+}
+
+bool RunMonitor::is_monitor_step(long n) const {
+  return (next_sample_ < samples_.size() && samples_[next_sample_] == n) ||
+         (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) ||
+         n % monitor_every_ == 0 || n == planned_;
+}
+
+void RunMonitor::diverge(const State& s, std::string reason) {
+  result_.status = RunStatus::diverged;
+  result_.reason = std::move(reason);
+  result_.diverged_step = s.step;
+  result_.diverged_time = s.time;
+}
+
+bool RunMonitor::observe(const State& s, double kinetic0) {
+  const long n = s.step;
+  if (n == 0) u0_ = s.u;
+  const ContactStep& c = contact_.last;
+  Energies e = observe_energies(model_, s, u0_);
+  e.friction_dissipation = contact_.total.friction_dissipation;
+  if (n == 0) result_.initial_energy = kinetic0 + e.strain + e.hourglass + c.stored_energy;
+  reference_energy_ = std::max({reference_energy_, result_.initial_energy, std::abs(e.external_work)});
+  const double total = e.total() + c.stored_energy;
+  if (!std::isfinite(total) || !std::isfinite(e.external_work)) {
+    diverge(s, "non-finite state");
+    return false;
+  }
+  // Growth is judged against the energy put in, E_0 + |W_ext| (a body released under gravity
+  // legitimately reaches E_0 + W_ext, which can be twice max(E_0, |W_ext|)).
+  input_energy_ = std::max(input_energy_, result_.initial_energy + std::abs(e.external_work));
+  if (input_energy_ > 0.0 && total > settings_.energy_growth_limit * input_energy_) {
+    diverge(s, "energy growth: total energy " + std::to_string(total) + " J exceeds " +
+                   std::to_string(settings_.energy_growth_limit) + " x the energy put in " +
+                   std::to_string(input_energy_) + " J");
+    return false;
+  }
+  // The balance counts the stored contact (penalty) energy with the bodies' energies.
+  Energies balance = e;
+  balance.strain += c.stored_energy;
+  const double error = energy_error(balance, result_.initial_energy, reference_energy_);
+
+  if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
+    const double vm = std::sqrt(last_peaks_.all);
+    max_into(result_.von_mises_sampled_max, von_mises_maxima(model_, s.u.data()));
+    const double depth = penetration(model_, settings_.obstacles, contact_, s.u);
+    auto& v = result_.history.values;
+    const HistoryInputs row{s, e, c, contact_.total, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
+    history_fields(&row, [&v](const char*, double value) { v.push_back(value); });
+    for (const auto& pr : settings_.probes) {
+      const int d = 2 * pr.node;
+      v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});
+    }
+    result_.energy_error_max = std::max(result_.energy_error_max, error);
+    result_.penetration_max = std::max(result_.penetration_max, depth);
+    ++next_sample_;
+  }
+  if (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) {
+    FieldSnapshot f;
+    f.step = n;
+    f.time = s.time;
+    f.u = s.u;
+    f.v.resize(s.u.size());
+    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+    f.von_mises.resize(model_.num_cells());
+    cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
+    result_.fields.push_back(std::move(f));
+    ++next_field_;
+  }
+  return true;
+}
+
+void RunMonitor::finish(const State& s) {
+  result_.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  result_.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
+  result_.steps = s.step;
+  result_.end_time = s.time;
+  if (result_.wall_seconds > 0.0)
+    result_.element_steps_per_second =
+        static_cast<double>(model_.num_cells()) * static_cast<double>(s.step) / result_.wall_seconds;
+  const ContactTotals& c = contact_.total;
+  result_.friction_dissipation = c.friction_dissipation;
+  result_.contact_work = c.contact_work;
+  result_.contact_steps = c.steps_with_contact;
+  result_.contact_sweeps_max = c.iterations_max;
+  result_.contact_unconverged_steps = c.unconverged_steps;
+  if (c.steps_with_contact > 0)
+    result_.contact_sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
+}
+
+}  // namespace ricochet

@@ -1,0 +1,69 @@
+// What every scheme's time loop shares: the sampling schedule, the observers at monitor
+// steps, divergence checks, history rows and field snapshots, timing. A scheme loop calls
+// is_monitor_step(n) to know whether to compute energies, then observe(...) at those steps.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <ctime>
+#include <vector>
+
+#include "solver/contact/contact_set.hpp"
+#include "solver/schemes/run_types.hpp"
+
+namespace ricochet {
+
+class RunMonitor {
+ public:
+  // `contact` is the scheme's contact set (no candidates: no contact), read at every observation:
+  // its candidates' penetration, its observables, and at the end its run totals.
+  RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact);
+
+  long planned_steps() const { return planned_; }
+  bool is_monitor_step(long n) const;
+
+  // At a monitor step: energies from s (after an evaluate with energy), divergence checks,
+  // the history row and field snapshot when scheduled. Returns false if the run diverged.
+  // `kinetic0` is the kinetic energy of the initial conditions (used at n = 0).
+  bool observe(const State& s, double kinetic0);
+
+  // What the force pass of step n ranks (internal_forces()): the run's stress measure, the
+  // cells with a node on a contact boundary (a contact candidate node, or a boundary node of a
+  // body pair's master body), and as threshold the run's interior peak so far (only a new peak
+  // matters), except at history samples, whose row holds the step's own peak (threshold 0).
+  // Null when the step needs no stresses (RunSettings::stress_every_step false, not a sample).
+  const StressTracking* stress_tracking(long n);
+
+  // Every step, before observe(): folds the peaks of the state s (t_n) into the run's maxima.
+  void track_stress(const State& s, const StressPeaks& peaks);
+
+  // Every step whose contact forces (the contact set's last step) act over [t_begin, t_begin + dt]:
+  // accumulates the contact impulses and the first and last contact times.
+  void contact_step(double t_begin, double dt);
+
+  // Records a divergence found by the scheme itself (e.g. det F <= 0, a failed solve).
+  void diverge(const State& s, std::string reason);
+
+  // End of the run: timings, steps, and the contact set's run totals.
+  void finish(const State& s);
+
+ private:
+  const Model& model_;
+  const RunSettings& settings_;
+  RunResult& result_;
+  const ContactSet& contact_;
+  long planned_ = 0;
+  std::vector<long> samples_, field_steps_;
+  std::size_t next_sample_ = 0, next_field_ = 0;
+  long monitor_every_ = 1;
+  Eigen::VectorXd u0_;
+  double reference_energy_ = 0.0;  // max(E_0, |W_ext|): the energy-error denominator
+  double input_energy_ = 0.0;      // max over time of E_0 + |W_ext|: the growth reference
+  std::vector<std::uint8_t> contact_cell_;
+  StressTracking tracking_;
+  StressPeaks last_peaks_;  // of the last track_stress()
+  std::chrono::steady_clock::time_point wall0_;
+  std::clock_t cpu0_;
+};
+
+}  // namespace ricochet

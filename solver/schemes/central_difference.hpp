@@ -1,0 +1,70 @@
+// Central-difference explicit integration with a lumped mass (docs/background.md, Central
+// differences with a lumped mass, steps 1, 2, 5):
+//   a_n = M^-1 (f_ext - f_int(u_n)),  v_{n+1/2} = v_{n-1/2} + dt a_n,  u_{n+1} = u_n + dt v_{n+1/2}.
+// The step is split into phases so a scheme can act between them (contact, from the next
+// schemes on) and observers can read the state at t_n: evaluate() then update().
+#pragma once
+
+#include <vector>
+
+#include "solver/elements/internal_forces.hpp"
+
+namespace ricochet {
+
+// A prescribed DOF: either a constant velocity, or a displacement reached linearly over
+// `ramp` seconds (ramp = 0: imposed from t = 0), u(t) = value * min(1, t / ramp).
+struct PrescribedDof {
+  enum class Kind { velocity, displacement };
+  int dof = 0;
+  Kind kind = Kind::velocity;
+  double value = 0.0;  // [m/s] or [m]
+  double ramp = 0.0;   // [s]
+
+  double displacement_at(double t) const {
+    return ramp > 0.0 && t < ramp ? value * t / ramp : value;
+  }
+};
+
+struct State {
+  long step = 0;
+  double time = 0.0;     // t_n [s]
+  double dt = 0.0;       // [s]
+  Eigen::VectorXd u;       // u_n [m]
+  Eigen::VectorXd v_half;  // v_{n-1/2} (v_0 before the first evaluate) [m/s]
+  Eigen::VectorXd a;       // a_n after evaluate() [m/s^2]
+  Eigen::VectorXd f_int;   // f_int(u_n) [N]
+  Eigen::VectorXd f_ext;   // body forces M g [N], constant
+  double hourglass_dissipation = 0.0;  // work of viscous hourglass forces so far [J]
+  double reaction_work = 0.0;          // work of the prescribed-DOF reactions up to t_n [J]
+  double reaction_power = 0.0;         // sum R v_n of the last evaluate() [W]
+  ForceTotals forces;                  // totals of the last evaluate()
+};
+
+// Allocates the state: u_0 = initial_displacement (or 0) with prescribed displacements
+// imposed, v_0 = the model's initial velocities with prescribed velocities imposed.
+State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
+                    const Eigen::VectorXd& initial_displacement = {});
+
+// Phase 1 of step n: f_int(u_n), free accelerations, then the prescribed DOFs' accelerations
+// and the work of their reactions, accumulated by the trapezoidal rule in time (the rule under
+// which 1/2 v_n^T M v_n changes by the work of the forces, to O(dt^2)). At n = 0 also sets
+// v_{-1/2} = v_0 - dt/2 a_0.
+// With `stress` (internal_forces()) the pass also ranks the step's stresses.
+void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
+              bool with_energy, const StressTracking* stress = nullptr);
+
+// Phase 2: v_{n+1/2} = v_{n-1/2} + dt a_n, u_{n+1} = u_n + dt v_{n+1/2}, t = (n+1) dt.
+void update(State& s);
+
+// Velocity at t_n, v_n = v_{n-1/2} + dt/2 a_n, of one DOF (valid after evaluate()).
+inline double velocity_at_step(const State& s, int dof) {
+  return s.v_half[dof] + 0.5 * s.dt * s.a[dof];
+}
+
+// Fixed-step estimate: safety * min over cells of L_e / c_p (docs/background.md, Critical time
+// step). [s]
+inline double stable_time_step(const Model& model, double safety) {
+  return safety * model.critical_dt;
+}
+
+}  // namespace ricochet

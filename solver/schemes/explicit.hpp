@@ -1,0 +1,12 @@
+// The explicit time loop (central differences) of the semi-explicit and the explicit penalty
+// schemes: evaluate, the contact solve of the run's method, the observers, update.
+#pragma once
+
+#include "solver/schemes/run_types.hpp"
+
+namespace ricochet {
+
+RunResult run_explicit(const Model& model, const RunSettings& settings,
+                       const ProgressFn& progress = {});
+
+}  // namespace ricochet

@@ -1,0 +1,488 @@
+#include "solver/schemes/implicit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "solver/observers/run_monitor.hpp"
+
+namespace ricochet {
+
+ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
+                                       const ImplicitSettings& settings)
+    : model_(model), run_(run), set_(settings) {
+  s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement);
+  contact_ = make_contact_set(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
+  x_free_.assign(contact_.candidates.size(), {});
+  weight_.assign(contact_.candidates.size(), 0.0);
+  system_ = make_system_matrix(model);
+  const int n = model.num_dofs();
+  pcg_.resize(n);
+  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &inv_diag_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
+                             &y_, &impulse_, &prescribed_v_})
+    v->setZero(n);
+  s_.a.setZero();
+  s_.forces = internal_forces(model, s_.u.data(), s_.v_half.data(), s_.f_int.data(), true);
+
+  fixed_.assign(n, 0);
+  for (const auto& p : run.prescribed) fixed_[p.dof] = 1;
+  const SparseMatrixR& A = system_.matrix;
+  for (int i = 0; i < n; ++i)
+    for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) {
+      const int j = A.innerIndexPtr()[k];
+      if (!fixed_[i] && !fixed_[j]) continue;
+      (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
+    }
+  residuals_.reserve(set_.max_newton_iterations + 1);
+  // Automatic choice, from measurements on the oblique plate (docs/implicit.md): PCG up to
+  // 3 x the explicit critical step (A mass-dominated: a few CG iterations), LDL^T beyond.
+  if (set_.linear_solver == LinearSolverKind::ldlt ||
+      (set_.linear_solver == LinearSolverKind::automatic && run.dt > 3.0 * model.critical_dt))
+    use_direct();
+  const int directions = contact_.any_friction ? 2 : 1;
+  columns_.resize(n, directions * static_cast<int>(contact_.candidates.size()));
+  w_.resize(columns_.cols(), columns_.cols());
+  engaged_.assign(contact_.candidates.size(), 0);
+  r_vec_.resize(columns_.cols());
+}
+
+// Factorizes A. If A is indefinite (the tangent of a far-off iterate under strong compression,
+// e.g. St Venant-Kirchhoff's negative geometric stiffness), shifts it by lambda M with lambda =
+// 1, 4, 16, ... until it is positive definite: the iteration matrix changes, the converged
+// solution G = 0 does not (a damped Newton iteration). The contact problem needs W positive
+// definite.
+void ImplicitIntegrator::use_direct() {
+  direct_ = true;
+  ldlt_.analyze(system_.matrix);
+  a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
+}
+
+bool ImplicitIntegrator::factorize() {
+  const int n = model_.num_dofs();
+  double* a = a_values_.data();
+  std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    if (ldlt_.factorize(a)) {
+      if (attempt > 0) {
+        ++shifted_iterations_;
+        for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
+      }
+      return true;
+    }
+    const double add = attempt == 0 ? 1.0 : 3.0 * std::pow(4.0, attempt - 1);  // lambda 1, 4, 16, ...
+    for (int i = 0; i < n; ++i)
+      if (!fixed_[i]) a[system_.diagonal_slots[i]] += add * model_.mass[i];
+  }
+  failure_ = "LDL^T factorization: matrix not positive definite even when shifted by 4^11 M";
+  return false;
+}
+
+// Prescribed DOFs: identity rows and columns, so their velocity increment is zero.
+void ImplicitIntegrator::constrain_matrix() {
+  double* values = system_.matrix.valuePtr();
+  for (int k : constrained_entries_) values[k] = 0.0;
+  for (int k : constrained_diagonal_) values[k] = 1.0;
+  for (int i = 0; i < model_.num_dofs(); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
+}
+
+bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (direct_) {
+    ldlt_.solve(b, x);
+    return true;
+  }
+  const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance,
+                                 set_.max_linear_iterations);
+  linear_total_ += r.iterations;
+  if (r.converged) return true;
+  // CG met an indefinite matrix (a far-off iterate) or stalled: continue the run with the
+  // shifted LDL^T, which handles both.
+  if (set_.linear_solver == LinearSolverKind::pcg) {
+    failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
+    return false;
+  }
+  ++solver_switches_;
+  use_direct();
+  if (!factorize()) return false;
+  ldlt_.solve(b, x);
+  return true;
+}
+
+double ImplicitIntegrator::residual(bool with_energy) {
+  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
+  u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
+  s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
+  g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * impulse_;
+  for (const auto& p : run_.prescribed) {
+    prescribed_v_[p.dof] = g_[p.dof];  // the unconstrained residual: dt times the reaction
+    g_[p.dof] = 0.0;
+  }
+  // The momentum scale of the residual: the largest seen in the run, so the round-off floor of G
+  // (e.g. the cancellation in E = (F^T F - I)/2) stays relative to the problem's scale when the
+  // motion decays.
+  scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
+                     model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
+                     dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
+                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(), 1e-300});
+  const double scale = scale_;
+  return g_.lpNorm<Eigen::Infinity>() / scale;
+}
+
+bool ImplicitIntegrator::solve_contact() {
+  const double dt = s_.dt, th = set_.theta;
+  const bool position = run_.contact.level == ContactLevel::position;
+  const double c = position ? dt * th : 1.0;  // x = x_free + c H y
+  ContactSet& cs = contact_;
+  cs.active.clear();
+  auto u_pred = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) + dt * th * dv_free_.segment<2>(2 * j); };
+  auto x_pred = [&](int j) -> Vec2 { return model_.ref.col(j) + u_pred(j); };
+  update_boxes(cs, x_pred);
+  for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
+    // Gap and frame at the predicted position (see closest() in obstacle.hpp); the reactions of
+    // this iterate act along this frame. Between bodies the segment is chosen from the start of
+    // the step (u0, v0).
+    ObstacleContact oc;
+    if (!candidate_frame(model_, run_.obstacles, cs, k, u0_, v0_, x_pred, oc)) {
+      cs.reaction[k] = {};
+      continue;
+    }
+    const Stencil& st = cs.stencil[k];
+    const double gap = oc.gap;
+    // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
+    // engaged contact that separates simply gets R = 0 from the contact law.
+    if (gap < 0.0) engaged_[k] = 1;
+    if (!engaged_[k]) {
+      cs.reaction[k] = {};
+      continue;
+    }
+    cs.normal[k] = oc.normal;
+    const Vec2 t = oc.tangent();
+    Vec2 du = Vec2::Zero(), v_rel = Vec2::Zero();
+    double compliance = 0.0;  // sum_j coef_j^2 / a_jj: exact when A is diagonal
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      du += st.coef[j] * (u_pred(node) - u0_.segment<2>(2 * node));
+      v_rel += st.coef[j] * (v1_.segment<2>(2 * node) + dv_free_.segment<2>(2 * node));
+      const double a_jj = 0.5 / inv_diag_[2 * node] + 0.5 / inv_diag_[2 * node + 1];
+      compliance += st.coef[j] * st.coef[j] / a_jj;
+    }
+    x_free_[k] = position ? LocalPair{gap, t.dot(du)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    weight_[k] = c * dt * compliance;
+    cs.active.push_back(k);
+  }
+  if (cs.active.empty()) {
+    impulse_.setZero();
+    y_.setZero();
+    contact_sweeps_ = 0;
+    return true;
+  }
+  contact_converged_ = direct_ ? false : uzawa_contact(c);
+  // As in the semi-explicit scheme, Gauss-Seidel that reaches contact.max_sweeps leaves its last
+  // iterate: the step goes on and is counted in unconverged_steps. Only a failed linear solve
+  // stops the run.
+  if (!contact_converged_) {
+    if (!exact_contact(c)) return false;
+    if (!contact_converged_) step_unconverged_ = true;
+  }
+  return true;
+}
+
+bool ImplicitIntegrator::engage_penetrating() {
+  bool any = false;
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
+    if (engaged_[k]) continue;
+    const ContactCandidate& cc = contact_.candidates[k];
+    const Vec2 x = model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node);
+    const bool inside = cc.pair < 0 ? closest(run_.obstacles[cc.obstacle], x).gap < 0.0
+                                    : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
+    if (inside) {
+      engaged_[k] = 1;
+      any = true;
+    }
+  }
+  return any;
+}
+
+// The reactions of the active contacts as nodal forces (the stencil of each contact).
+void ImplicitIntegrator::build_impulse() {
+  impulse_.setZero();
+  for (int k : contact_.active) add_reaction(k);
+}
+
+void ImplicitIntegrator::add_reaction(int k) {
+  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+  const Vec2 r = contact_.reaction[k].n * n + contact_.reaction[k].t * t;
+  const Stencil& st = contact_.stencil[k];
+  for (int j = 0; j < st.count; ++j) impulse_.segment<2>(2 * st.node[j]) += st.coef[j] * r;
+}
+
+// (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
+LocalPair ImplicitIntegrator::stencil_dot(int k, const Eigen::VectorXd& y) const {
+  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+  const Stencil& st = contact_.stencil[k];
+  Vec2 sum = Vec2::Zero();
+  for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.segment<2>(2 * st.node[j]);
+  return {n.dot(sum), t.dot(sum)};
+}
+
+// Uzawa sweeps: x(R) exact through one solve of A per sweep, rho = omega / w with w the
+// diagonal estimate of the local compliance; omega halves whenever the largest reaction
+// change grows. Fast when A is mass-dominated (W nearly diagonal).
+bool ImplicitIntegrator::uzawa_contact(double c) {
+  ContactSet& cs = contact_;
+  const double dt = s_.dt;
+  double omega = 1.0, last_change = 1e300;
+  for (contact_sweeps_ = 1; contact_sweeps_ <= set_.uzawa_sweeps; ++contact_sweeps_) {
+    build_impulse();
+    rhs_ = dt * impulse_;
+    if (!solve(rhs_, y_)) return false;
+    double change = 0.0, size = 0.0;
+    for (int k : cs.active) {
+      const ContactCandidate& cc = cs.candidates[k];
+      const LocalPair hy = stencil_dot(k, y_);
+      const LocalPair x{x_free_[k].n + c * hy.n, x_free_[k].t + c * hy.t};
+      const double rho = omega / weight_[k];
+      LocalPair& r = cs.reaction[k];
+      const LocalPair next = bipotential_correct(r, x, cc.friction_coeff, rho);
+      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
+      size = std::max(size, std::hypot(next.n, next.t));
+      r = next;
+    }
+    if (change <= run_.contact.tolerance * size || change == 0.0) {
+      build_impulse();
+      rhs_ = dt * impulse_;
+      return solve(rhs_, y_);
+    }
+    if (change > last_change) omega *= 0.5;
+    last_change = change;
+  }
+  return false;
+}
+
+// The condensed problem with the exact W = c dt H A^-1 H^T, built from one column solve per
+// active contact direction, then Gauss-Seidel over the contacts with each contact's local
+// problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
+// combination of the same columns. Returns false only when a linear solve fails; whether
+// Gauss-Seidel converged within contact.max_sweeps is contact_converged_.
+bool ImplicitIntegrator::exact_contact(double c) {
+  ContactSet& cs = contact_;
+  const double dt = s_.dt;
+  const int dirs = cs.any_friction ? 2 : 1;
+  const int m = dirs * static_cast<int>(cs.active.size());
+  ++exact_contact_solves_;
+  contact_converged_ = false;
+  auto direction = [&](int a) -> Vec2 {
+    const Vec2 n = cs.normal[cs.active[a / dirs]];
+    return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
+  };
+  for (int a = 0; a < m; ++a) {
+    rhs_.setZero();
+    const Stencil& st = cs.stencil[cs.active[a / dirs]];
+    for (int j = 0; j < st.count; ++j) rhs_.segment<2>(2 * st.node[j]) += st.coef[j] * direction(a);
+    y_.setZero();
+    if (!solve(rhs_, y_)) return false;
+    columns_.col(a) = y_;
+  }
+  for (int a = 0; a < m; ++a) {
+    const Stencil& st = cs.stencil[cs.active[a / dirs]];
+    for (int b = 0; b < m; ++b) {
+      double h = 0.0;
+      for (int j = 0; j < st.count; ++j) h += st.coef[j] * direction(a).dot(columns_.col(b).segment<2>(2 * st.node[j]));
+      w_(a, b) = c * dt * h;
+    }
+  }
+
+  const double tol = run_.contact.tolerance;
+  for (contact_sweeps_ = 1; contact_sweeps_ <= run_.contact.max_sweeps; ++contact_sweeps_) {
+    double change = 0.0, size = 0.0;
+    for (int i = 0; i < static_cast<int>(cs.active.size()); ++i) {
+      const int k = cs.active[i];
+      const double mu = cs.candidates[k].friction_coeff;
+      LocalPair& r = cs.reaction[k];
+      // x = x_base + W_kk r, x_base = x_free + sum over the other contacts.
+      LocalPair base = x_free_[k];
+      for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
+        if (j == i) continue;
+        const LocalPair rj = cs.reaction[cs.active[j]];
+        base.n += w_(dirs * i, dirs * j) * rj.n + (dirs == 2 ? w_(dirs * i, dirs * j + 1) * rj.t : 0.0);
+        if (dirs == 2) base.t += w_(dirs * i + 1, dirs * j) * rj.n + w_(dirs * i + 1, dirs * j + 1) * rj.t;
+      }
+      LocalPair next;
+      if (dirs == 1) {
+        next = {std::max(0.0, -base.n / w_(i, i)), 0.0};
+      } else {
+        const double wnn = w_(2 * i, 2 * i), wnt = w_(2 * i, 2 * i + 1), wtn = w_(2 * i + 1, 2 * i),
+                     wtt = w_(2 * i + 1, 2 * i + 1);
+        const double rho = 1.0 / std::max(wnn, wtt);
+        next = r;
+        for (int it = 0; it < 200; ++it) {
+          const LocalPair x{base.n + wnn * next.n + wnt * next.t, base.t + wtn * next.n + wtt * next.t};
+          const LocalPair upd = bipotential_correct(next, x, mu, rho);
+          const double d = std::hypot(upd.n - next.n, upd.t - next.t);
+          next = upd;
+          if (d <= 1e-3 * tol * std::hypot(upd.n, upd.t) || d == 0.0) break;
+        }
+      }
+      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
+      size = std::max(size, std::hypot(next.n, next.t));
+      r = next;
+    }
+    if (change <= tol * size || change == 0.0) {
+      contact_converged_ = true;
+      break;
+    }
+  }
+  contact_sweeps_ = std::min(contact_sweeps_, run_.contact.max_sweeps);
+  for (int a = 0; a < m; ++a) {
+    const LocalPair r = cs.reaction[cs.active[a / dirs]];
+    r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
+  }
+  y_.noalias() = columns_.leftCols(m) * r_vec_.head(m);
+  build_impulse();
+  return true;
+}
+
+bool ImplicitIntegrator::step(bool with_energy) {
+  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
+  u0_ = s_.u;
+  v0_ = s_.v_half;
+  f0_ = s_.f_int;
+  const double hourglass_power0 = s_.forces.hourglass_power;
+  const double t1 = s_.time + dt;
+  // Predictor: where the step resolves the dynamics (dt <= critical_dt), linear extrapolation of
+  // the velocity, v1 = 2 v0 - v_{-1}; otherwise (and at the first step) v1 = v0.
+  if (s_.step > 0 && dt <= model_.critical_dt)
+    v1_ = 2.0 * v0_ - v_prev_;
+  else
+    v1_ = v0_;
+  for (const auto& p : run_.prescribed)
+    v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
+                     ? p.value
+                     : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+  impulse_.setZero();
+  // The last step's reactions in the frame (and on the stencil) they were solved in.
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) add_reaction(static_cast<int>(k));
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
+  residuals_.clear();
+  step_unconverged_ = false;
+  int sweeps = 0;
+  double r = residual(false);
+  if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
+    v1_ = v0_;  // the extrapolated predictor inverted an element: start from v0 instead
+    for (const auto& p : run_.prescribed)
+      v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
+                       ? p.value
+                       : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+    r = residual(false);
+  }
+  for (int it = 0;; ++it) {
+    if (!std::isfinite(r)) {
+      failure_ = "non-finite Newton residual at iteration " + std::to_string(it);
+      return false;
+    }
+    residuals_.push_back(r);
+    // With contact candidates at least one iteration runs: the contact law is only imposed
+    // inside an iteration, and a free iterate can have a zero residual (a rigid translation).
+    // Converged also requires that no contact candidate outside the engaged set penetrates at u1:
+    // the reactions of engaged contacts can push a neighbouring node into the obstacle.
+    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty()) && !engage_penetrating()) break;
+    if (it == set_.max_newton_iterations) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations (relative residual %.3g)", it, r);
+      failure_ = buf;
+      return false;
+    }
+    ++newton_total_;
+    assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_,
+                    f1_.data(), false);
+    constrain_matrix();
+    if (direct_ && !factorize()) return false;
+    rhs_ = -(g_ + dt * impulse_);  // the residual without the contact reactions
+    dv_free_.setZero();
+    if (!solve(rhs_, dv_free_)) return false;
+    if (!contact_.candidates.empty()) {
+      if (!solve_contact()) return false;
+      sweeps = std::max(sweeps, contact_sweeps_);
+    } else {
+      y_.setZero();
+    }
+    // Backtracking: the full Newton update unless it inverts an element or is not finite
+    // (large steps on coarse stiff problems); then halve it, up to 10 times.
+    dv_free_ += y_;
+    v_base_ = v1_;
+    double alpha = 1.0;
+    for (int ls = 0;; ++ls) {
+      v1_ = v_base_ + alpha * dv_free_;
+      r = residual(false);
+      if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
+      alpha *= 0.5;
+    }
+  }
+  if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
+
+  // Bookkeeping of the converged step: reactions at prescribed DOFs (R = G_unconstrained/dt),
+  // contact work R.du and slip work, viscous hourglass work (same xi-average as the forces).
+  for (const auto& p : run_.prescribed)
+    s_.reaction_work += prescribed_v_[p.dof] / dt * (u1_[p.dof] - u0_[p.dof]);
+  s_.hourglass_dissipation += dt * (xi * s_.forces.hourglass_power + (1.0 - xi) * hourglass_power0);
+  // The step's contact results, from the converged reactions: the contacts with r_n > 0, their
+  // statuses and forces, and their work and slip work on the step's displacement.
+  ContactSet& cs = contact_;
+  begin_step(cs);
+  for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
+    const LocalPair r = cs.reaction[k];
+    if (!(r.n > 0.0)) {
+      record(cs, k, ContactStatus::open);
+      continue;
+    }
+    cs.active.push_back(k);
+    record(cs, k, classify(r, cs.candidates[k].friction_coeff));
+  }
+  auto du = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) - u0_.segment<2>(2 * j); };
+  for (int k : cs.active) record_work(cs, k, 1.0, du, true, du);
+  finish_step(cs, sweeps, !step_unconverged_);
+  v_prev_ = v0_;
+  s_.u = u1_;
+  s_.v_half = v1_;
+  s_.f_int = f1_;
+  ++s_.step;
+  s_.time = static_cast<double>(s_.step) * dt;
+  return true;
+}
+
+RunResult run_implicit(const Model& model, const RunSettings& settings, const ImplicitSettings& implicit,
+                       const ProgressFn& progress) {
+  RunResult result;
+  ImplicitIntegrator integrator(model, settings, implicit);
+  const State& s = integrator.state();
+  const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
+  const bool with_contact = !integrator.contact().candidates.empty();
+  RunMonitor monitor(model, settings, result, integrator.contact());
+  const long planned = monitor.planned_steps();
+  for (;;) {
+    const long n = s.step;
+    // The Newton iterates' force passes are not states of the run: the converged state's
+    // stresses come from a stress pass of their own.
+    if (const StressTracking* st = monitor.stress_tracking(n)) monitor.track_stress(s, stress_peaks(model, s.u.data(), *st));
+    if (monitor.is_monitor_step(n)) {
+      if (!monitor.observe(s, kinetic0)) break;
+      if (progress) progress(n, planned, s.time);
+    }
+    if (n == planned) break;
+    if (!integrator.step(monitor.is_monitor_step(n + 1))) {
+      monitor.diverge(s, integrator.failure());
+      break;
+    }
+    if (with_contact) monitor.contact_step(s.time - s.dt, s.dt);  // the step just taken: [t_n, t_n+1]
+    if (!(s.forces.min_jacobian > 0.0)) {
+      monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
+      break;
+    }
+  }
+  monitor.finish(s);
+  result.newton_iterations = integrator.newton_iterations_total();
+  result.linear_iterations = integrator.linear_iterations_total();
+  result.direct_solver = integrator.direct_solver();
+  return result;
+}
+
+}  // namespace ricochet

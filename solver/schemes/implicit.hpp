@@ -1,0 +1,117 @@
+// The implicit reference scheme of the paper (FER/Impact; docs/background.md, The implicit
+// theta-scheme): the first-order theta-scheme on velocities
+//   M (v1 - v0) = dt [(1 - xi)(F - F_int)_0 + xi (F - F_int)_1] + dt R,
+//   u1 = u0 + dt [(1 - theta) v0 + theta v1],
+// solved by Newton with the consistent tangent A = M + theta xi dt^2 K_T + xi dt C assembled
+// into a preallocated sparse pattern, each linear system by Jacobi-preconditioned CG. Contact
+// reactions R at t1 come from the same bi-potential update as the semi-explicit scheme, on the
+// condensed problem x = x_free + W R with W = c H A^-1 H^T dt (c = dt theta at the position
+// level, 1 at the velocity level), by Uzawa sweeps in which x is evaluated exactly (one solve
+// of A per sweep), so the converged reactions satisfy the contact law exactly.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "solver/contact/contact_set.hpp"
+#include "solver/linear/pcg.hpp"
+#include "solver/schemes/run_types.hpp"
+#include "solver/linear/sparse_ldlt.hpp"
+#include "solver/elements/tangent.hpp"
+
+namespace ricochet {
+
+enum class LinearSolverKind {
+  automatic,  // see below
+  pcg,        // Jacobi-preconditioned CG
+  ldlt,       // sparse LDL^T (solver/linear/sparse_ldlt.hpp, AMD ordering; symbolic analysis once)
+};
+// automatic: pcg up to dt = 3 critical_dt, ldlt beyond; a pcg solve that fails (indefinite
+// matrix of a far-off iterate) switches the run to ldlt.
+
+struct ImplicitSettings {
+  double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
+  double xi = 0.5;                  // [0.5, 1]; 0.5 = trapezoidal force average
+  double newton_tolerance = 1e-10;  // |G|_inf <= tol * momentum scale
+  int max_newton_iterations = 25;
+  double linear_tolerance = 1e-12;  // relative CG residual
+  int max_linear_iterations = 10000;
+  LinearSolverKind linear_solver = LinearSolverKind::automatic;
+  int uzawa_sweeps = 30;  // Uzawa sweeps before switching to the exact condensed W (pcg only)
+};
+
+class ImplicitIntegrator {
+ public:
+  ImplicitIntegrator(const Model& model, const RunSettings& run, const ImplicitSettings& settings);
+
+  // t_n -> t_{n+1}. With `with_energy` the energies of the new state are computed. Returns
+  // false when Newton or a linear solve fails (failure() says why); the state is then that of
+  // the failed iterate.
+  bool step(bool with_energy);
+
+  // The state at t_n for the observers: u = u_n, v_half = v_n and a = 0 (so velocity_at_step
+  // gives v_n), f_int = f_int(u_n, v_n), forces = its totals.
+  const State& state() const { return s_; }
+  const ContactSet& contact() const { return contact_; }
+  const std::vector<double>& residuals() const { return residuals_; }  // relative, last step
+  const std::string& failure() const { return failure_; }
+  long newton_iterations_total() const { return newton_total_; }
+  long linear_iterations_total() const { return linear_total_; }
+  bool direct_solver() const { return direct_; }
+  long exact_contact_solves() const { return exact_contact_solves_; }
+  long shifted_iterations() const { return shifted_iterations_; }
+
+ private:
+  double residual(bool with_energy);  // G at (u1, v1) into g_, returns its relative inf-norm
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  bool solve_contact();  // from dv_free_, fills y_ and contact_.reaction
+  bool uzawa_contact(double c);        // true if it converged
+  bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
+  bool factorize();
+  void use_direct();
+  void build_impulse();
+  void add_reaction(int k);                                  // candidate k's reaction into impulse_
+  LocalPair stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
+  bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
+  void constrain_matrix();
+
+  const Model& model_;
+  const RunSettings& run_;
+  ImplicitSettings set_;
+  State s_;
+  ContactSet contact_;
+  // Per candidate, the local problem x = x_free + w r of the current Newton iterate (w: the
+  // diagonal estimate of the local compliance).
+  std::vector<LocalPair> x_free_;
+  std::vector<double> weight_;
+  int contact_sweeps_ = 0;           // sweeps of the last contact solve
+  bool contact_converged_ = true;    // the last contact solve met its tolerance
+  SystemMatrix system_;
+  Pcg pcg_;
+  bool direct_ = false;
+  SparseLdlt ldlt_;
+  Eigen::MatrixXd columns_;   // A^-1 e for each active contact direction (2n x m)
+  Eigen::MatrixXd w_;         // condensed compliance (m x m)
+  std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
+  Eigen::VectorXd r_vec_;     // dt R per active contact direction
+  std::vector<double> a_values_;  // the values of A as factorized (with the shift, if any)
+  Eigen::VectorXd inv_diag_;
+  std::vector<unsigned char> fixed_;  // per DOF: prescribed
+  std::vector<int> constrained_entries_;  // value positions of prescribed rows and columns
+  std::vector<int> constrained_diagonal_;
+  Eigen::VectorXd v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, y_, impulse_, prescribed_v_;
+  std::vector<double> residuals_;
+  std::string failure_;
+  double hourglass_power0_ = 0.0;
+  double scale_ = 0.0;  // largest momentum scale of the residual so far
+  long newton_total_ = 0, linear_total_ = 0;
+  long exact_contact_solves_ = 0;
+  long shifted_iterations_ = 0;
+  long solver_switches_ = 0;
+  bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
+};
+
+RunResult run_implicit(const Model& model, const RunSettings& settings,
+                       const ImplicitSettings& implicit, const ProgressFn& progress = {});
+
+}  // namespace ricochet

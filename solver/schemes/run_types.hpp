@@ -1,0 +1,129 @@
+// The types every scheme's run shares: what a run is asked (RunSettings) and what it gives
+// (RunResult, with its History and field snapshots). Typed structs in, typed results out: no
+// files here. The schemes' loops are run_explicit() (explicit.hpp) and run_implicit() (implicit.hpp).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solver/contact/contact_set.hpp"
+#include "solver/materials/stress.hpp"
+
+namespace ricochet {
+
+struct Probe {
+  std::string name;
+  int node = 0;  // global node index
+};
+
+struct RunSettings {
+  double dt = 0.0;                  // fixed time step [s]
+  double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps
+  double sample_interval = 0.0;     // history sampling [s]; <= 0 samples every step
+  std::vector<double> field_times;  // field snapshots at the steps nearest these times [s]
+  std::vector<Probe> probes;
+  std::vector<PrescribedDof> prescribed;
+  double energy_growth_limit = 2.0;  // diverged when total energy > limit * reference energy [-]
+  int monitor_every = 50;            // divergence checks at least every this many steps
+  Eigen::VectorXd initial_displacement;  // optional, 2n [m]
+
+  // Rigid obstacles, with friction[b][o] the coefficient of body b against obstacle o. The
+  // explicit loop treats contact by the bi-potential method (the semi-explicit scheme:
+  // contact_phase() between evaluate and update) or by penalty springs (the explicit penalty
+  // scheme); the implicit scheme by its condensed bi-potential problem.
+  enum class ContactMethod { bipotential, penalty };
+  std::vector<Obstacle> obstacles;
+  std::vector<std::vector<double>> friction;
+  // Contact between bodies, node to segment (body_contact.hpp), treated by the same method.
+  std::vector<BodyPair> body_pairs;
+  ContactMethod contact_method = ContactMethod::bipotential;
+  // The measure of von_mises_max, the history column and the fields; the peaks of all three
+  // are tracked at every step (stress.hpp).
+  StressMeasure stress_measure = StressMeasure::cauchy;
+  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
+  // von_mises_max then depends on the sampling interval).
+  bool stress_every_step = true;
+  ContactSettings contact;
+  PenaltySettings penalty;
+};
+
+enum class RunStatus { ok, diverged };
+
+// History columns, in order; then per probe <name>_ux, _uy, _vx, _vy.
+std::vector<std::string> history_columns(const std::vector<Probe>& probes);
+
+struct History {
+  std::vector<std::string> columns;
+  std::vector<double> values;  // row-major, columns.size() per row
+  std::size_t rows() const { return columns.empty() ? 0 : values.size() / columns.size(); }
+  double at(std::size_t row, std::size_t col) const { return values[row * columns.size() + col]; }
+  std::size_t column(const std::string& name) const;  // throws std::out_of_range
+};
+
+struct FieldSnapshot {
+  long step = 0;
+  double time = 0.0;               // [s]
+  Eigen::VectorXd u;               // 2n [m]
+  Eigen::VectorXd v;               // 2n, v_n [m/s]
+  std::vector<double> von_mises;   // per cell [Pa]
+};
+
+// Where and when a von Mises peak was reached: the largest value over every step of a run.
+struct StressPeak {
+  double value = 0.0;     // [Pa]
+  double time = 0.0;      // [s]
+  int cell = -1;          // global cell index; -1 if never reached (no cell, or zero stress)
+  int body = -1;          // index of the body
+  int element = -1;       // index of the cell within its body (its quads, then its triangles)
+  double x = 0.0, y = 0.0;  // the cell's centroid at that time (mean of its current nodes) [m]
+};
+
+struct RunResult {
+  RunStatus status = RunStatus::ok;
+  std::string reason;              // why a run diverged
+  long diverged_step = -1;
+  double diverged_time = 0.0;      // [s]
+  double dt = 0.0;                 // [s]
+  long steps = 0;                  // steps taken
+  long planned_steps = 0;
+  double end_time = 0.0;           // time reached [s]
+  History history;
+  std::vector<FieldSnapshot> fields;
+  double initial_energy = 0.0;     // E_0 [J]
+  double energy_error_max = 0.0;   // over samples [-]
+  double von_mises_max = 0.0;      // of stress_measure, over every step and cell [Pa]
+  double von_mises_max_time = 0.0; // [s]
+  StressMeasure stress_measure = StressMeasure::cauchy;
+  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
+  // von_mises_max then depends on the sampling interval).
+  bool stress_every_step = true;
+  StressPeak von_mises_peak;           // of stress_measure over every step, all cells
+  StressPeak von_mises_interior_peak;  // the same over the cells off the contact boundary
+  VonMises2 von_mises_sampled_max{0.0, 0.0, 0.0};  // per measure, over the history samples [Pa]
+  double total_mass = 0.0;         // [kg]
+  double contact_impulse_normal = 0.0;      // sum over steps of normal_force * dt [N s]
+  double contact_impulse_tangential = 0.0;  // sum over steps of tangential_force * dt [N s]
+  double contact_first_time = -1.0;  // start of the first step with an active contact [s]; -1: none
+  double contact_last_time = -1.0;   // end of the last step with an active contact [s]; -1: none
+  double penetration_max = 0.0;    // over samples [m]
+  double friction_dissipation = 0.0;  // at the end [J]
+  double contact_work = 0.0;       // at the end [J]
+  int contact_candidates = 0;      // boundary node-obstacle pairs watched
+  double contact_sweeps_mean = 0.0;  // Gauss-Seidel sweeps per step with contact
+  int contact_sweeps_max = 0;
+  long contact_steps = 0;          // steps with at least one active contact
+  long contact_unconverged_steps = 0;  // steps that hit the sweep cap
+  long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
+  long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
+  bool direct_solver = false;      // implicit scheme: LDL^T (true) or PCG (false)
+  double wall_seconds = 0.0;       // time loop only
+  double cpu_seconds = 0.0;        // time loop only, process CPU time
+  double element_steps_per_second = 0.0;
+};
+
+// Called at monitor steps so a long run can show progress; must not modify anything.
+using ProgressFn = std::function<void(long step, long planned_steps, double time)>;
+
+}  // namespace ricochet
