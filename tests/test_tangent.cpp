@@ -329,10 +329,9 @@ TEST(Tangent, ScalesCombineLinearlyAndMatrixIsSymmetric) {
 }
 
 TEST(Tangent, ForcesAndTotalsEqualInternalForces) {
-  // The same element kernels (element_kernels.hpp), but assemble_system takes P from
-  // first_piola_and_tangent, which equals first_piola only up to a few ulps (material.hpp), and
-  // GCC fuses multiply-adds differently in each kernel, so f_int and the totals may differ in
-  // the last bits: 1e-14 of the largest force.
+  // Same expressions, except that assemble_system forms F = I + ue^T dN/dX column by column
+  // (2-wide FMAs that stay in registers) where internal_forces uses Eigen's dot products, so F
+  // and hence f_int may differ in the last bits: 1e-14 of the largest force.
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds())
       for (bool with_energy : {false, true}) {

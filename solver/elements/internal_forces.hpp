@@ -1,6 +1,5 @@
 // Internal nodal forces f_int(u) of every element block: gather -> F = I + ue^T dN/dX -> P(F)
-// -> fe = vol dN/dX P^T -> scatter (the element kernels: element_kernels.hpp). Flat DOF arrays:
-// u, v, f are 2n, interleaved (x0, y0, x1..).
+// -> fe = vol dN/dX P^T -> scatter. Flat DOF arrays: u, v, f are 2n, interleaved (x0, y0, x1..).
 #pragma once
 
 #include <cstdint>

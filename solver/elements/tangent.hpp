@@ -1,8 +1,8 @@
 // Linearisation of the element forces for implicit schemes (docs/background.md, The implicit
 // theta-scheme: each Newton iteration solves (M + theta xi dt^2 K_T + xi dt C) dv = ...). One
 // element pass assembles the iteration matrix A = m_scale M + k_scale K_T + c_scale C into a sparse
-// matrix of fixed pattern and, in the same pass, the internal forces as internal_forces computes
-// them.
+// matrix of fixed pattern and, in the same pass, the internal forces exactly as internal_forces
+// computes them.
 // DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver.
 #pragma once
 
@@ -33,9 +33,8 @@ SystemMatrix make_system_matrix(const Model& model);
 // where M is the lumped mass (diagonal), K_T = d f_int / d u at velocity v (material + geometric
 // stiffness of every element, plus the stiffness-form hourglass stiffness c gamma gamma^T),
 // C = d f_int / d v (the viscous-form hourglass damping c gamma gamma^T, zero otherwise);
-// in the same element pass writes f_int(u, v) into f_int and returns the ForceTotals (energies
-// only when with_energy): the element kernels of internal_forces (element_kernels.hpp), with P
-// from first_piola_and_tangent, so the values equal internal_forces' up to round-off.
+// in the same element pass writes f_int(u, v) into f_int (same values as internal_forces) and
+// returns the same ForceTotals (energies only when with_energy).
 // `s` must come from make_system_matrix(model). Performs no heap allocation.
 ForceTotals assemble_system(const Model& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
