@@ -37,17 +37,16 @@ std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh) {
   };
   std::vector<BoundaryEdge> all;
   std::vector<Directed> keys;
-  auto add_cell = [&](const int* c, int count, int cell) {
+  auto add_cell = [&](const int* c, int count) {
     const double area = signed_area(mesh, c, count);
     for (int k = 0; k < count; ++k) {
       const int a = c[k], b = c[(k + 1) % count];
       keys.push_back({std::min(a, b), std::max(a, b), static_cast<int>(all.size())});
-      all.push_back({a, b, cell, area});
+      all.push_back({a, b, area});
     }
   };
-  int cell = 0;
-  for (const auto& q : mesh.quads) add_cell(q.data(), 4, cell++);
-  for (const auto& t : mesh.tris) add_cell(t.data(), 3, cell++);
+  for (const auto& q : mesh.quads) add_cell(q.data(), 4);
+  for (const auto& t : mesh.tris) add_cell(t.data(), 3);
   std::sort(keys.begin(), keys.end(),
             [](const Directed& x, const Directed& y) { return std::tie(x.lo, x.hi, x.index) < std::tie(y.lo, y.hi, y.index); });
   std::vector<char> once(all.size(), 0);
@@ -63,9 +62,9 @@ std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh) {
   return edges;
 }
 
-std::vector<int> boundary_nodes(const Mesh& mesh) {
+std::vector<int> edge_nodes(const std::vector<BoundaryEdge>& edges) {
   std::vector<int> nodes;
-  for (const BoundaryEdge& e : boundary_edges(mesh)) {
+  for (const BoundaryEdge& e : edges) {
     nodes.push_back(e.a);
     nodes.push_back(e.b);
   }

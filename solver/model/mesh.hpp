@@ -33,8 +33,7 @@ double q4_corner_quality(const Mesh& mesh, const std::array<int, 4>& q);
 // lies on its left and its outward normal is (e_y, -e_x)/|e| for e = x_b - x_a.
 struct BoundaryEdge {
   int a = 0, b = 0;        // node indices (of the mesh, or global ones in a Model)
-  int cell = 0;            // the owning cell: quads first, then triangles
-  double cell_area = 0.0;  // reference area of that cell [m^2]
+  double cell_area = 0.0;  // reference area of the one cell that uses it [m^2]
 };
 
 // The one boundary-edge finder: every edge used by one cell only, in the order of the cells
@@ -42,7 +41,10 @@ struct BoundaryEdge {
 // penalty springs' stiffness and the boundary node sets are all built from it.
 std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh);
 
-// Nodes on the mesh boundary: the ends of its boundary edges. Sorted, unique.
-std::vector<int> boundary_nodes(const Mesh& mesh);
+// The ends of the given edges, sorted and unique.
+std::vector<int> edge_nodes(const std::vector<BoundaryEdge>& edges);
+
+// Nodes on the mesh boundary: edge_nodes(boundary_edges(mesh)).
+inline std::vector<int> boundary_nodes(const Mesh& mesh) { return edge_nodes(boundary_edges(mesh)); }
 
 }  // namespace ricochet

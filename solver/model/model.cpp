@@ -79,18 +79,12 @@ Model build_model(const std::vector<BodyInput>& inputs, PlaneMode plane, const V
     if (!(t > 0.0)) throw std::invalid_argument("body '" + in.name + "': thickness must be > 0");
     if (!(rho > 0.0)) throw std::invalid_argument("body '" + in.name + "': density must be > 0");
     std::vector<BoundaryEdge> edges = boundary_edges(m);
-    std::vector<int> boundary;
     for (BoundaryEdge& e : edges) {
       e.a += node0;
       e.b += node0;
-      e.cell += cell0;
-      boundary.push_back(e.a);
-      boundary.push_back(e.b);
     }
-    std::sort(boundary.begin(), boundary.end());
-    boundary.erase(std::unique(boundary.begin(), boundary.end()), boundary.end());
     model.bodies.push_back({in.name, node0, m.num_nodes(), cell0, m.num_cells(), t,
-                            in.quad_element, in.material, std::move(boundary), std::move(edges)});
+                            in.quad_element, in.material, edge_nodes(edges), std::move(edges)});
     model.ref.middleCols(node0, m.num_nodes()) = m.nodes;
     for (int i = 0; i < m.num_nodes(); ++i)
       model.initial_velocity.segment<2>(2 * (node0 + i)) = in.initial_velocity;
