@@ -46,6 +46,13 @@ def metric_for(name, metric):
 
 def load(path, metric="auto"):
     """Returns (context, {benchmark name: numpy array of samples in ns}, {name: note})."""
+    doc = read_document(path)
+    samples, notes = samples_of(doc, metric)
+    return doc.get("context", {}), samples, notes
+
+
+def read_document(path):
+    """The parsed Google Benchmark JSON of path; InputError naming path if it is not one."""
     try:
         with open(path) as f:
             doc = json.load(f)
@@ -53,6 +60,11 @@ def load(path, metric="auto"):
         raise InputError(f"{path}: cannot read a benchmark JSON file: {e}")
     if not isinstance(doc, dict) or not isinstance(doc.get("benchmarks"), list):
         raise InputError(f"{path}: no \"benchmarks\" list (not Google Benchmark JSON output)")
+    return doc
+
+
+def samples_of(doc, metric="auto"):
+    """({benchmark name: numpy array of samples in ns}, {name: note}) of a read document."""
     samples, medians, notes = {}, {}, {}
     for b in doc["benchmarks"]:
         name = b.get("run_name") or b.get("name")
@@ -76,7 +88,7 @@ def load(path, metric="auto"):
         if name not in samples:
             samples[name] = [value]
             notes.setdefault(name, "aggregates only")
-    return doc.get("context", {}), {k: np.asarray(v) for k, v in samples.items()}, notes
+    return {k: np.asarray(v) for k, v in samples.items()}, notes
 
 
 def spread(x):
