@@ -50,6 +50,7 @@ import bench_compare as BC  # noqa: E402
 
 RATE_COUNTER = "element_steps_per_second"
 METRIC_LABEL = {"real_time": "real time", "cpu_time": "CPU time"}
+UNIT_LABEL = {"us": "µs"}
 
 
 class Run:
@@ -243,8 +244,7 @@ def plot_benchmark(path, name, runs, changes, metric):
                     xytext=(9, 7 if slower else -14), color=color, fontsize=9, weight="bold")
     label_commit_axis(ax, commits, runs)
     metric_name = METRIC_LABEL[BC.metric_for(name, metric)]
-    ax.set_ylabel(f"{metric_name} ({unit})")
-    ax.set_title(name, fontsize=10, loc="left")
+    ax.set_ylabel(f"{metric_name} ({UNIT_LABEL.get(unit, unit)})")
     ax.grid(True, axis="y", alpha=0.3)
     ax.margins(x=0.05, y=0.2)
     if len(machines_of(runs)) > 1:
@@ -287,7 +287,7 @@ tr.regression td.ratio{background:#fdecea;font-weight:bold}
 tr.improvement td.ratio{background:#e8f5e9}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
-code{font-size:.85em;background:#f4f4f4;padding:0 .2em}
+code{font-size:.95em;background:#f4f4f4;padding:0 .2em}
 .none{border:2px solid #2e7d32;background:#f3faf3;padding:.5em 1em}
 .warn{border:2px dashed #c33;background:#fff6f6;padding:.5em 1em}
 .meta td{border:none;padding:.1em .8em .1em 0}
@@ -408,7 +408,8 @@ def render_page(history_dir, runs, superseded, changes, plots, metric, min_chang
     h.append('<h2 id="plots">Benchmarks</h2>')
     h.append("<p>Each point is the median of a commit's repetitions; its bar spans the fastest "
              "to the slowest repetition. A red ring marks a regression beyond noise (its ratio "
-             "beside it), a green ring an improvement.</p>")
+             "beside it), a green ring an improvement. The time axes start at the data, not "
+             "at zero: read the size of a change from the tables above.</p>")
     for name, file_name in plots:
         h.append(f'<figure id="{anchors[name]}"><h3>{esc(name)}</h3>'
                  f'<a href="plots/{esc(file_name)}"><img src="plots/{esc(file_name)}" '
