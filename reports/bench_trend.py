@@ -287,7 +287,8 @@ tr.regression td.ratio{background:#fdecea;font-weight:bold}
 tr.improvement td.ratio{background:#e8f5e9}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
-code{font-size:.95em;background:#f4f4f4;padding:0 .2em}
+code{font-family:ui-monospace,'DejaVu Sans Mono',Menlo,Consolas,monospace;font-size:.9em;
+background:#f4f4f4;padding:0 .2em}
 .none{border:2px solid #2e7d32;background:#f3faf3;padding:.5em 1em}
 .warn{border:2px dashed #c33;background:#fff6f6;padding:.5em 1em}
 .meta td{border:none;padding:.1em .8em .1em 0}
@@ -375,7 +376,9 @@ def render_page(history_dir, runs, superseded, changes, plots, metric, min_chang
     h = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
          "<title>ricochet: benchmark trend</title>", f"<style>{CSS}</style></head><body>",
          "<h1>Benchmark trend</h1>", '<table class="meta">']
-    meta = [("history", f"<code>{esc(history_dir)}</code>: {len(runs)} result files, "
+    files = f"{len(runs) + len(superseded)} result files" + (
+        f" ({len(superseded)} superseded)" if superseded else "")
+    meta = [("history", f"<code>{esc(history_dir)}</code>: {files}, "
                         f"{len(commit_axis(runs))} commits, {len(plots)} benchmarks"),
             ("machines", "; ".join(esc(machine_label(m)) for m in machines)),
             ("generated", esc(now))]
