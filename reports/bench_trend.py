@@ -21,10 +21,11 @@ regression, named by the later commit of the pair; faster beyond noise is listed
 improvement. The time judged and plotted is bench_compare's: real time for manual-time and
 real-time benchmarks, CPU time otherwise, in the unit of the JSON's time_unit.
 
-Writes DIR/index.html (default DIR: HISTORY_DIR) and the plots DIR/plots/*.png. The page and
-plots are built in a temporary folder and moved into place, index.html last, so a failure
-leaves the previous page. Exit status: 0 written (regressions or not), 2 bad input (one line on
-stderr naming the file: not a folder, no result file, a file that is not a ci/bench result).
+Writes DIR/index.html (default DIR: HISTORY_DIR) and the plots DIR/plots/*.png (plots/ is the
+page's: other PNGs there are removed). The page and plots are built in a temporary folder and
+moved into place, index.html last, so a failure leaves the previous page. Exit status: 0
+written (regressions or not), 1 the page could not be written, 2 bad input (one line on stderr
+naming the file: not a folder, no result file, a file that is not a ci/bench result).
 """
 
 import argparse
@@ -328,7 +329,8 @@ def change_rows(changes, anchors, multi_machine):
             note.append(f"{c['skipped']} commit(s) in between not measured here: the change is "
                         f"in one of them or in {esc(c['after'].short)}")
         if j["few"]:
-            note.append("fewer than 3 repetitions: only the 2 % floor applies")
+            note.append(f"fewer than 3 repetitions: only the {100 * j['threshold']:g} % "
+                        "floor applies")
         if c["before"].compiler != c["after"].compiler:
             note.append("compiler changed")
         if c["before"].options != c["after"].options or c["before"].build != c["after"].build:
@@ -389,7 +391,7 @@ def render_page(history_dir, runs, superseded, changes, plots, metric, min_chang
                  "(cpu_model and cpu count). Each machine is its own series; changes are "
                  "judged only between commits measured on the same machine.</p>")
     h.append(f'<h2 id="regressions">Regressions beyond noise ({len(regressions)})</h2>')
-    h.append(f"<p>{rule_text(metric, min_change)}</p>")
+    h.append(f"<p>{rule_text(min_change)}</p>")
     if regressions:
         h.append(change_table("regressions", regressions, anchors, multi, "regression"))
     else:
@@ -425,7 +427,7 @@ def render_page(history_dir, runs, superseded, changes, plots, metric, min_chang
     return "\n".join(h) + "\n"
 
 
-def rule_text(metric, min_change):
+def rule_text(min_change):
     return ("Consecutive commits measured on the same machine are compared as "
             "<code>reports/bench_compare.py</code> compares two files: the medians of the "
             "repetitions, and the change is beyond noise when the ratio exceeds 1 + max(3 "
@@ -495,8 +497,12 @@ def main(argv=None):
         return 2
     changes = judge_history(runs, args.min_change / 100.0)
     out = args.out or args.history
-    plots = write_page(out, runs, superseded, changes, args.history, args.metric,
-                       args.min_change / 100.0)
+    try:
+        plots = write_page(out, runs, superseded, changes, args.history, args.metric,
+                           args.min_change / 100.0)
+    except OSError as e:
+        print(f"bench_trend: cannot write the page in {out}: {e}", file=sys.stderr)
+        return 1
     regressions = [c for c in changes if c["judge"]["verdict"] == "slower"]
     print(f"bench_trend: {os.path.join(out, 'index.html')}: {len(runs)} files, "
           f"{len(plots)} benchmarks, {len(regressions)} regressions beyond noise")
