@@ -283,7 +283,7 @@ h1{font-size:1.6em;margin-bottom:.2em} h2{margin-top:1.8em;border-bottom:1px sol
 h3{font-size:1.05em;margin-bottom:.2em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
-th{background:#f0f0f0} td.num{text-align:right;white-space:nowrap}
+th{background:#f0f0f0} td.num{text-align:right;white-space:nowrap} td code{white-space:nowrap}
 tr.regression td.ratio{background:#fdecea;font-weight:bold}
 tr.improvement td.ratio{background:#e8f5e9}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
