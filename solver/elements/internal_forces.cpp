@@ -3,148 +3,71 @@
 #include <algorithm>
 #include <cmath>
 
-#include "solver/elements/kinematics.hpp"
+#include "solver/elements/element_kernels.hpp"
 
 namespace ricochet {
 namespace {
 
-// Each kernel instantiation (element x material x options) is its own function, so the
-// material law inlines into its loop: instantiated inline into all_blocks, four materials
-// exhausted GCC's inlining budget and the kernels ran 3x slower.
+// The force pass (element_kernels.hpp): P = first_piola(F) at each point and, with kStress
+// (0 = no stresses, else 1 + the measure, so that each measure's kernel is its own), the von
+// Mises peak of each cell over its points above the threshold.
+template <bool kEnergy_, int kStress>
+struct ForcePass {
+  static constexpr bool kEnergy = kEnergy_;
+  static constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
+  StressPeaks peaks;
+  double threshold = 0.0;
+  const std::uint8_t* contact_cell = nullptr;
+  VonMisesRatio vm2;  // the cell's largest so far (cells of several points)
 
-// Elements whose cells share one deformation gradient per integration point: T3 and Q4 2x2.
-template <bool kEnergy, int kStress, class Mat>
-[[gnu::noinline, gnu::flatten]] void t3_forces(const T3Block& b, const Mat& material, const double* u, double* f,
-                                             const StressTracking* tracking, ForceTotals& t) {
-  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
-  double energy = 0.0, min_j = t.min_jacobian;
-  StressPeaks peaks = t.stress;
-  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
-  const double threshold = tracking ? tracking->threshold : 0.0;
-  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const T3Geom& g = b.geom[e];
-    const Grad3 ue = gather<3>(u, b.conn[e]);
-    const Mat2 F = deformation_gradient<3>(ue, g.dndx);
-    const double det_f = F.determinant();
-    min_j = std::min(min_j, det_f);
-    const Mat2 P = mat.first_piola(F);
-    scatter<3>(f, b.conn[e], g.vol * g.dndx * P.transpose());
-    if constexpr (kEnergy) energy += g.vol * mat.energy_density(F);
-    if constexpr (kStress) {
-      if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
-        const int cell = b.first_cell + static_cast<int>(e);
-        peaks.add(von_mises_ratio(mat, F, P, det_f, measure), cell, contact_cell[cell] != 0);
-      }
-    }
+  ForcePass(const StressTracking* tracking, const ForceTotals& t)
+      : peaks(t.stress),
+        threshold(tracking ? tracking->threshold : 0.0),
+        contact_cell(tracking ? tracking->contact_cell : nullptr) {}
+
+  struct Response {
+    Mat2 P;
+  };
+  template <class Mat>
+  EIGEN_ALWAYS_INLINE Response response(const Mat& mat, const Mat2& F) const {
+    return {mat.first_piola(F)};
   }
-  t.strain_energy += energy;
-  t.min_jacobian = min_j;
-  t.stress = peaks;
-}
-
-template <bool kEnergy, int kStress, class Mat>
-[[gnu::noinline, gnu::flatten]] void q4_full_forces(const Q4FullBlock& b, const Mat& material, const double* u, double* f,
-                                                  const StressTracking* tracking, ForceTotals& t) {
-  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
-  double energy = 0.0, min_j = t.min_jacobian;
-  StressPeaks peaks = t.stress;
-  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
-  const double threshold = tracking ? tracking->threshold : 0.0;
-  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const Q4FullGeom& g = b.geom[e];
-    const Grad4 ue = gather<4>(u, b.conn[e]);
-    Grad4 fe = Grad4::Zero();
-    [[maybe_unused]] VonMisesRatio vm2;
-    for (int q = 0; q < 4; ++q) {
-      const Mat2 F = deformation_gradient<4>(ue, g.dndx[q]);
-      const double det_f = F.determinant();
-      min_j = std::min(min_j, det_f);
-      const Mat2 P = mat.first_piola(F);
-      fe.noalias() += g.vol[q] * g.dndx[q] * P.transpose();
-      if constexpr (kEnergy) energy += g.vol[q] * mat.energy_density(F);
-      if constexpr (kStress) {
-        if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
-          const VonMisesRatio r = von_mises_ratio(mat, F, P, det_f, measure);
-          if (ratio_greater(r, vm2)) vm2 = r;
+  void begin_element() {
+    if constexpr (kStress) vm2 = VonMisesRatio{};
+  }
+  // One-point cells are ranked by their point; cells of several points by the largest of
+  // their points, at the end of the cell.
+  template <int kPoints, class Mat, class Rows>
+  EIGEN_ALWAYS_INLINE void point(const Mat& mat, const Mat2& F, double det_f, const Response& r, const Rows&,
+                                 double, int cell) {
+    if constexpr (kStress) {
+      if (von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold)) {
+        if constexpr (kPoints == 1) {
+          peaks.add(von_mises_ratio(mat, F, r.P, det_f, measure), cell, contact_cell[cell] != 0);
+        } else {
+          const VonMisesRatio x = von_mises_ratio(mat, F, r.P, det_f, measure);
+          if (ratio_greater(x, vm2)) vm2 = x;
         }
       }
     }
-    scatter<4>(f, b.conn[e], fe);
-    if constexpr (kStress) {
-      if (vm2.num > 0.0) {
-        const int cell = b.first_cell + static_cast<int>(e);
-        peaks.add(vm2, cell, contact_cell[cell] != 0);
-      }
+  }
+  template <class Gamma>
+  void hourglass(const Gamma&, double, bool) {}
+  template <int kPoints>
+  void end_element(std::size_t, int cell) {
+    if constexpr (kStress && kPoints > 1) {
+      if (vm2.num > 0.0) peaks.add(vm2, cell, contact_cell[cell] != 0);
     }
   }
-  t.strain_energy += energy;
-  t.min_jacobian = min_j;
-  t.stress = peaks;
-}
-
-// One-point Q4 with Flanagan-Belytschko hourglass forces f_I = gamma_I Q, Q = c q.
-template <bool kEnergy, int kStress, bool kViscous, class Mat>
-[[gnu::noinline, gnu::flatten]] void q4_hourglass_forces(const Q4HourglassBlock& b, const Mat& material, const double* u,
-                                                       const double* v, double* f, const StressTracking* tracking,
-                                                       ForceTotals& t) {
-  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
-  double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
-  StressPeaks peaks = t.stress;
-  constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
-  const double threshold = tracking ? tracking->threshold : 0.0;
-  const std::uint8_t* contact_cell = tracking ? tracking->contact_cell : nullptr;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const Q4HourglassGeom& g = b.geom[e];
-    const Grad4 ue = gather<4>(u, b.conn[e]);
-    const Mat2 F = deformation_gradient<4>(ue, g.dndx);
-    const double det_f = F.determinant();
-    min_j = std::min(min_j, det_f);
-    const Mat2 P = mat.first_piola(F);
-    Grad4 fe = g.vol * g.dndx * P.transpose();
-    if constexpr (kStress) {
-      if (von_mises_may_exceed(mat, F, P, det_f, measure, threshold)) {
-        const int cell = b.first_cell + static_cast<int>(e);
-        peaks.add(von_mises_ratio(mat, F, P, det_f, measure), cell, contact_cell[cell] != 0);
-      }
-    }
-    if constexpr (kViscous) {
-      const Vec2 qdot = gather<4>(v, b.conn[e]).transpose() * g.gamma;
-      const Vec2 Q = g.hourglass_coeff * qdot;
-      fe.noalias() += g.gamma * Q.transpose();
-      hg_power += Q.dot(qdot);
-    } else {
-      const Vec2 q = ue.transpose() * g.gamma;
-      fe.noalias() += g.gamma * (g.hourglass_coeff * q).transpose();
-      if constexpr (kEnergy) hg_energy += 0.5 * g.hourglass_coeff * q.squaredNorm();
-    }
-    scatter<4>(f, b.conn[e], fe);
-    if constexpr (kEnergy) energy += g.vol * mat.energy_density(F);
-  }
-  t.strain_energy += energy;
-  t.hourglass_energy += hg_energy;
-  t.hourglass_power += hg_power;
-  t.min_jacobian = min_j;
-  t.stress = peaks;
-}
+  void finish(ForceTotals& t) const { t.stress = peaks; }
+};
 
 template <bool kEnergy, int kStress>
 void all_blocks(const Model& model, const double* u, const double* v, double* f, const StressTracking* cc,
                 ForceTotals& t) {
-  for (const auto& b : model.q4_hourglass)
-    std::visit(
-        [&](const auto& mat) {
-          if (b.form == HourglassForm::viscous)
-            q4_hourglass_forces<kEnergy, kStress, true>(b, mat, u, v, f, cc, t);
-          else
-            q4_hourglass_forces<kEnergy, kStress, false>(b, mat, u, v, f, cc, t);
-        },
-        b.material);
-  for (const auto& b : model.q4_full)
-    std::visit([&](const auto& mat) { q4_full_forces<kEnergy, kStress>(b, mat, u, f, cc, t); }, b.material);
-  for (const auto& b : model.t3)
-    std::visit([&](const auto& mat) { t3_forces<kEnergy, kStress>(b, mat, u, f, cc, t); }, b.material);
+  for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
+    element_kernel<decltype(viscous)::value>(b, mat, u, v, f, ForcePass<kEnergy, kStress>(cc, t), t);
+  });
 }
 
 }  // namespace

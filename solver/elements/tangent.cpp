@@ -1,10 +1,12 @@
 #include "solver/elements/tangent.hpp"
 
-#include "solver/elements/kinematics.hpp"
-
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
+#include <type_traits>
+
+#include "solver/elements/element_kernels.hpp"
 
 namespace ricochet {
 namespace {
@@ -59,134 +61,64 @@ inline void scatter_matrix(double* val, const int* slot, const ElementMatrix<N>&
   }
 }
 
-struct Context {
-  const double* u;
-  const double* v;
+// The assembly pass (element_kernels.hpp): P and A = dP/dF in one evaluation at each point
+// (first_piola_and_tangent), the element matrix k_scale K_T + c_scale C of each cell, scattered
+// through `slots` (this block's, 4 N^2 per cell).
+template <bool kEnergy_, int N>
+struct SystemPass {
+  static constexpr bool kEnergy = kEnergy_;
   double k_scale, c_scale;
   double* val;
-  double* f;
+  const int* slots;
+  ElementMatrix<N> k;
+
+  struct Response {
+    Mat2 P;
+    Eigen::Matrix4d A;
+  };
+  template <class Mat>
+  EIGEN_ALWAYS_INLINE Response response(const Mat& mat, const Mat2& F) const {
+    Response r;
+    mat.first_piola_and_tangent(F, r.P, r.A);
+    return r;
+  }
+  void begin_element() { k.set_zero(); }
+  template <int kPoints, class Mat>
+  void point(const Mat&, const Mat2&, double, const Response& r, const Eigen::Matrix<double, N, 2>& dn,
+             double vol, int) {
+    add_point<N>(dn, k_scale * vol, r.A, k);
+  }
+  // Hourglass stiffness (stiffness form) or damping (viscous form).
+  void hourglass(const Eigen::Matrix<double, N, 1>& gamma, double c, bool viscous) {
+    add_hourglass<N>(gamma, (viscous ? c_scale : k_scale) * c, k);
+  }
+  template <int kPoints>
+  void end_element(std::size_t e, int) {
+    scatter_matrix<N>(val, slots + 4 * N * N * e, k);
+  }
+  void finish(ForceTotals&) const {}
 };
 
-// Each kernel instantiation is its own function so the material law inlines into its loop
-// (see internal_forces.cpp).
-template <bool kEnergy, class Mat>
-[[gnu::noinline]] void t3_system(const T3Block& b, const Mat& mat, const Context& x, const int* slots,
-               ForceTotals& t) {
-  double energy = 0.0, min_j = t.min_jacobian;
-  ElementMatrix<3> k;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const T3Geom& g = b.geom[e];
-    const Grad3 ue = gather<3>(x.u, b.conn[e]);
-    const Mat2 F = deformation_gradient<3>(ue, g.dndx);
-    min_j = std::min(min_j, F.determinant());
-    Mat2 P;
-    Eigen::Matrix4d A;
-    mat.first_piola_and_tangent(F, P, A);
-    scatter<3>(x.f, b.conn[e], g.vol * g.dndx * P.transpose());
-    if constexpr (kEnergy) energy += g.vol * mat.energy_density(F);
-    k.set_zero();
-    add_point<3>(g.dndx, x.k_scale * g.vol, A, k);
-    scatter_matrix<3>(x.val, slots + 36 * e, k);
-  }
-  t.strain_energy += energy;
-  t.min_jacobian = min_j;
-}
-
-template <bool kEnergy, class Mat>
-[[gnu::noinline]] void q4_full_system(const Q4FullBlock& b, const Mat& mat, const Context& x, const int* slots,
-                    ForceTotals& t) {
-  double energy = 0.0, min_j = t.min_jacobian;
-  ElementMatrix<4> k;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const Q4FullGeom& g = b.geom[e];
-    const Grad4 ue = gather<4>(x.u, b.conn[e]);
-    Grad4 fe = Grad4::Zero();
-    k.set_zero();
-    for (int q = 0; q < 4; ++q) {
-      const Mat2 F = deformation_gradient<4>(ue, g.dndx[q]);
-      min_j = std::min(min_j, F.determinant());
-      Mat2 P;
-      Eigen::Matrix4d A;
-      mat.first_piola_and_tangent(F, P, A);
-      fe.noalias() += g.vol[q] * g.dndx[q] * P.transpose();
-      if constexpr (kEnergy) energy += g.vol[q] * mat.energy_density(F);
-      add_point<4>(g.dndx[q], x.k_scale * g.vol[q], A, k);
-    }
-    scatter<4>(x.f, b.conn[e], fe);
-    scatter_matrix<4>(x.val, slots + 64 * e, k);
-  }
-  t.strain_energy += energy;
-  t.min_jacobian = min_j;
-}
-
-template <bool kEnergy, bool kViscous, class Mat>
-[[gnu::noinline]] void q4_hourglass_system(const Q4HourglassBlock& b, const Mat& mat, const Context& x,
-                         const int* slots, ForceTotals& t) {
-  double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
-  ElementMatrix<4> k;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
-    const Q4HourglassGeom& g = b.geom[e];
-    const Grad4 ue = gather<4>(x.u, b.conn[e]);
-    const Mat2 F = deformation_gradient<4>(ue, g.dndx);
-    min_j = std::min(min_j, F.determinant());
-    Mat2 P;
-    Eigen::Matrix4d A;
-    mat.first_piola_and_tangent(F, P, A);
-    Grad4 fe = g.vol * g.dndx * P.transpose();
-    k.set_zero();
-    add_point<4>(g.dndx, x.k_scale * g.vol, A, k);
-    if constexpr (kViscous) {
-      const Vec2 qdot = gather<4>(x.v, b.conn[e]).transpose() * g.gamma;
-      const Vec2 Q = g.hourglass_coeff * qdot;
-      fe.noalias() += g.gamma * Q.transpose();
-      hg_power += Q.dot(qdot);
-      add_hourglass<4>(g.gamma, x.c_scale * g.hourglass_coeff, k);
-    } else {
-      const Vec2 q = ue.transpose() * g.gamma;
-      fe.noalias() += g.gamma * (g.hourglass_coeff * q).transpose();
-      if constexpr (kEnergy) hg_energy += 0.5 * g.hourglass_coeff * q.squaredNorm();
-      add_hourglass<4>(g.gamma, x.k_scale * g.hourglass_coeff, k);
-    }
-    scatter<4>(x.f, b.conn[e], fe);
-    scatter_matrix<4>(x.val, slots + 64 * e, k);
-    if constexpr (kEnergy) energy += g.vol * mat.energy_density(F);
-  }
-  t.strain_energy += energy;
-  t.hourglass_energy += hg_energy;
-  t.hourglass_power += hg_power;
-  t.min_jacobian = min_j;
-}
-
-// Blocks in the order internal_forces visits them (hourglass Q4, full Q4, T3), so f_int sums in
-// the same order; the slots are stored in Model order (q4_full, q4_hourglass, t3).
+// Blocks in the order of for_each_block, as internal_forces sums f_int; the slots are stored in
+// Model order (q4_full, q4_hourglass, t3).
 template <bool kEnergy>
-void all_blocks(const Model& model, const Context& x, const int* slots, ForceTotals& t) {
+void all_blocks(const Model& model, const double* u, const double* v, double k_scale, double c_scale,
+                double* val, double* f, const int* slots, ForceTotals& t) {
   std::size_t off_full = 0, off_hg = 0, off_t3 = 0;
   for (const auto& b : model.q4_full) off_hg += 64 * b.conn.size();
   off_t3 = off_hg;
   for (const auto& b : model.q4_hourglass) off_t3 += 64 * b.conn.size();
 
-  for (const auto& b : model.q4_hourglass) {
-    std::visit(
-        [&](const auto& mat) {
-          if (b.form == HourglassForm::viscous)
-            q4_hourglass_system<kEnergy, true>(b, mat, x, slots + off_hg, t);
-          else
-            q4_hourglass_system<kEnergy, false>(b, mat, x, slots + off_hg, t);
-        },
-        b.material);
-    off_hg += 64 * b.conn.size();
-  }
-  for (const auto& b : model.q4_full) {
-    std::visit([&](const auto& mat) { q4_full_system<kEnergy>(b, mat, x, slots + off_full, t); },
-               b.material);
-    off_full += 64 * b.conn.size();
-  }
-  for (const auto& b : model.t3) {
-    std::visit([&](const auto& mat) { t3_system<kEnergy>(b, mat, x, slots + off_t3, t); },
-               b.material);
-    off_t3 += 36 * b.conn.size();
-  }
+  for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
+    using Block = std::decay_t<decltype(b)>;
+    constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
+    std::size_t& off = std::is_same_v<Block, T3Block>       ? off_t3
+                       : std::is_same_v<Block, Q4FullBlock> ? off_full
+                                                            : off_hg;
+    element_kernel<decltype(viscous)::value>(b, mat, u, v, f,
+                                             SystemPass<kEnergy, N>{k_scale, c_scale, val, slots + off, {}}, t);
+    off += 4 * N * N * b.conn.size();
+  });
 }
 
 // Appends the slots of one block's elements, row-major over element DOFs.
@@ -272,12 +204,11 @@ ForceTotals assemble_system(const Model& model, const double* u, const double* v
   for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
   std::fill(f_int, f_int + ndof, 0.0);
 
-  const Context x{u, v, k_scale, c_scale, val, f_int};
   ForceTotals t;
   if (with_energy)
-    all_blocks<true>(model, x, s.slots.data(), t);
+    all_blocks<true>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
   else
-    all_blocks<false>(model, x, s.slots.data(), t);
+    all_blocks<false>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
 
   for (int d = 0; d < ndof; ++d) s.diagonal[d] = val[s.diagonal_slots[d]];
   return t;

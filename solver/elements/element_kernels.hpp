@@ -1,0 +1,164 @@
+// The element kernels, written once for both element passes: the forces of every step
+// (internal_forces.cpp) and the implicit iteration matrix with the forces (tangent.cpp).
+// Per element type, one kernel holds its formulation: the integration points (shape-function
+// gradients dN/dX and volume weights, which carry the Gauss weights and the thickness:
+// model.cpp), the kinematics at a point (gather -> F = I + ue^T dN/dX), the internal force
+// fe = sum vol dN/dX P^T plus the Flanagan-Belytschko hourglass forces of one-point Q4, the
+// scatter into f, the energies and the smallest det F. The pass supplies the material response
+// at a point (first_piola, or first_piola_and_tangent for the tangent; plane stress and strain
+// are inside the material law) and what it does besides the forces: stress tracking or the
+// element matrix.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <type_traits>
+#include <variant>
+
+#include "solver/elements/internal_forces.hpp"
+#include "solver/elements/kinematics.hpp"
+#include "solver/model/model.hpp"
+
+namespace ricochet {
+
+// Calls fn(block, material, std::bool_constant<viscous hourglass control>) for every element
+// block with its material's own type, in the order every pass sums f_int: Q4 with hourglass
+// control, Q4 2x2, T3 (the constant is false for the blocks without hourglass control).
+template <class Fn>
+void for_each_block(const Model& model, Fn&& fn) {
+  for (const auto& b : model.q4_hourglass)
+    std::visit(
+        [&](const auto& mat) {
+          if (b.form == HourglassForm::viscous)
+            fn(b, mat, std::true_type{});
+          else
+            fn(b, mat, std::false_type{});
+        },
+        b.material);
+  for (const auto& b : model.q4_full)
+    std::visit([&](const auto& mat) { fn(b, mat, std::false_type{}); }, b.material);
+  for (const auto& b : model.t3)
+    std::visit([&](const auto& mat) { fn(b, mat, std::false_type{}); }, b.material);
+}
+
+// The element kernels: element_kernel<kViscous>(block, material, u, v, f, pass, t) adds
+// f_int(u, v) of the block's cells into f and its totals into t (the strain energy and the
+// stored hourglass energy only with Pass::kEnergy; the hourglass power; the smallest det F).
+// `pass` is copied, so that its state stays in registers; it provides
+//   static constexpr bool kEnergy
+//   response(mat, F) -> r                 the material response at a point, r.P = P(F)
+//   begin_element()                       before the pass's work on a cell
+//   point<kPoints>(mat, F, det_f, r, dN/dX, vol, cell)   at each integration point, after
+//                                         its force (kPoints: points per cell)
+//   hourglass(gamma, c, viscous)          after the hourglass force (Q4 one-point)
+//   end_element<kPoints>(e, cell)         after the scatter of the cell's forces
+//   finish(t)                             after the block
+// Each instantiation (element x material x pass) is its own function, so the material law
+// inlines into its loop: instantiated inline into the block loop, four materials exhausted
+// GCC's inlining budget and the force kernels ran 3x slower.
+// Where each statement stands is part of the results and of the speed: it decides which
+// products GCC fuses into FMAs in the energy sums (-march=native) and how the registers are
+// allocated, so moving a statement can change the energies in the last bits or slow a kernel
+// (bench/bench_element_forces.cpp).
+
+// T3: constant gradients, one point.
+template <bool kViscous, class Pass, class Mat>
+[[gnu::noinline, gnu::flatten]] void element_kernel(const T3Block& b, const Mat& material, const double* u,
+                                                    const double*, double* f, const Pass& pass_in,
+                                                    ForceTotals& t) {
+  const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
+  Pass pass = pass_in;
+  double energy = 0.0, min_j = t.min_jacobian;
+  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+    const T3Geom& g = b.geom[e];
+    const Grad3 ue = gather<3>(u, b.conn[e]);
+    const Mat2 F = deformation_gradient<3>(ue, g.dndx);
+    const double det_f = F.determinant();
+    min_j = std::min(min_j, det_f);
+    const auto r = pass.response(mat, F);
+    scatter<3>(f, b.conn[e], g.vol * g.dndx * r.P.transpose());
+    if constexpr (Pass::kEnergy) energy += g.vol * mat.energy_density(F);
+    const int cell = b.first_cell + static_cast<int>(e);
+    pass.begin_element();
+    pass.template point<1>(mat, F, det_f, r, g.dndx, g.vol, cell);
+    pass.template end_element<1>(e, cell);
+  }
+  t.strain_energy += energy;
+  t.min_jacobian = min_j;
+  pass.finish(t);
+}
+
+// Q4 2x2: the four Gauss points.
+template <bool kViscous, class Pass, class Mat>
+[[gnu::noinline, gnu::flatten]] void element_kernel(const Q4FullBlock& b, const Mat& material, const double* u,
+                                                    const double*, double* f, const Pass& pass_in,
+                                                    ForceTotals& t) {
+  const Mat mat = material;  // see above
+  Pass pass = pass_in;
+  double energy = 0.0, min_j = t.min_jacobian;
+  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+    const Q4FullGeom& g = b.geom[e];
+    const Grad4 ue = gather<4>(u, b.conn[e]);
+    const int cell = b.first_cell + static_cast<int>(e);
+    Grad4 fe = Grad4::Zero();
+    pass.begin_element();
+    for (int q = 0; q < 4; ++q) {
+      const Mat2 F = deformation_gradient<4>(ue, g.dndx[q]);
+      const double det_f = F.determinant();
+      min_j = std::min(min_j, det_f);
+      const auto r = pass.response(mat, F);
+      fe.noalias() += g.vol[q] * g.dndx[q] * r.P.transpose();
+      if constexpr (Pass::kEnergy) energy += g.vol[q] * mat.energy_density(F);
+      pass.template point<4>(mat, F, det_f, r, g.dndx[q], g.vol[q], cell);
+    }
+    scatter<4>(f, b.conn[e], fe);
+    pass.template end_element<4>(e, cell);
+  }
+  t.strain_energy += energy;
+  t.min_jacobian = min_j;
+  pass.finish(t);
+}
+
+// Q4 one-point: the mean gradients at the centroid, plus Flanagan-Belytschko hourglass forces
+// q = sum_I gamma_I a_I, Q = c q, f_I += gamma_I Q (model.hpp), with a = v (viscous) or u.
+template <bool kViscous, class Pass, class Mat>
+[[gnu::noinline, gnu::flatten]] void element_kernel(const Q4HourglassBlock& b, const Mat& material,
+                                                    const double* u, const double* v, double* f,
+                                                    const Pass& pass_in, ForceTotals& t) {
+  const Mat mat = material;  // see above
+  Pass pass = pass_in;
+  double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
+  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+    const Q4HourglassGeom& g = b.geom[e];
+    const Grad4 ue = gather<4>(u, b.conn[e]);
+    const Mat2 F = deformation_gradient<4>(ue, g.dndx);
+    const double det_f = F.determinant();
+    min_j = std::min(min_j, det_f);
+    const auto r = pass.response(mat, F);
+    Grad4 fe = g.vol * g.dndx * r.P.transpose();
+    const int cell = b.first_cell + static_cast<int>(e);
+    pass.begin_element();
+    pass.template point<1>(mat, F, det_f, r, g.dndx, g.vol, cell);
+    if constexpr (kViscous) {
+      const Vec2 qdot = gather<4>(v, b.conn[e]).transpose() * g.gamma;
+      const Vec2 Q = g.hourglass_coeff * qdot;
+      fe.noalias() += g.gamma * Q.transpose();
+      hg_power += Q.dot(qdot);
+    } else {
+      const Vec2 q = ue.transpose() * g.gamma;
+      fe.noalias() += g.gamma * (g.hourglass_coeff * q).transpose();
+      if constexpr (Pass::kEnergy) hg_energy += 0.5 * g.hourglass_coeff * q.squaredNorm();
+    }
+    pass.hourglass(g.gamma, g.hourglass_coeff, kViscous);
+    scatter<4>(f, b.conn[e], fe);
+    pass.template end_element<1>(e, cell);
+    if constexpr (Pass::kEnergy) energy += g.vol * mat.energy_density(F);
+  }
+  t.strain_energy += energy;
+  t.hourglass_energy += hg_energy;
+  t.hourglass_power += hg_power;
+  t.min_jacobian = min_j;
+  pass.finish(t);
+}
+
+}  // namespace ricochet
