@@ -1,6 +1,7 @@
 // Stress measures and the per-step stress peaks (solver/materials/stress.hpp, internal_forces.hpp):
 // the three von Mises equivalents against closed forms, the upper bound that lets points skip,
-// the force pass's peaks against a separate stress pass, and von_mises_max on the oblique
+// the force pass's peaks against a separate stress pass, the sample values the force pass
+// computes against the separate passes they replace, and von_mises_max on the oblique
 // plate independent of the history sampling interval.
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include "solver/elements/internal_forces.hpp"
 #include "solver/schemes/explicit.hpp"
 #include "solver/materials/stress.hpp"
+#include "verification_meshes.hpp"
 
 namespace ricochet {
 namespace {
@@ -173,6 +175,75 @@ TEST(StressPeaks, ForcePassMatchesStressPass) {
     tracking.threshold = 2.0 * ref.all;
     EXPECT_EQ(internal_forces(model, u.data(), u.data(), f.data(), false, &tracking).stress.all_cell, -1);
   }
+}
+
+// A history sample's and a field snapshot's stresses, computed in the step's own force pass
+// (StressTracking::sampled_max, cell_von_mises), equal those of the separate passes they
+// replace (von_mises_maxima, cell_von_mises), for every element formulation, material law and
+// measure; the forces and the peaks are those of the pass without them. The same for the
+// implicit scheme's stress pass (stress_peaks). Equal up to a few ulps: GCC may fuse the
+// multiply-adds of the same expressions differently in each kernel (-march=native).
+TEST(StressPeaks, SampleInTheForcePassEqualsTheSeparatePasses) {
+  using namespace verification;
+  const std::vector<Material> materials = {
+      StVenantKirchhoff::make(1e7, 0.3, 1000.0, PlaneMode::stress), NeoHookean::make(1e7, 0.3, 1000.0, PlaneMode::strain),
+      BlatzKo::make(4e6, 1000.0, PlaneMode::strain), MooneyRivlin::make(2e6, 5e5, 5e7, 1000.0, PlaneMode::stress)};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> d(-0.015, 0.015);  // [m]: strains up to about 15 %, no cell inverted
+  auto near = [](double a, double b) { return std::abs(a - b) <= 1e-13 * std::max(std::abs(a), std::abs(b)); };
+  for (const Material& material : materials)
+    for (const ElementKind kind : all_element_kinds()) {
+      const Model model = single_body_model(grid_mesh(1.0, 0.8, 5, 4, 0.2, kind), material,
+                                            std::visit([](const auto& m) { return m.plane; }, material), kind);
+      Eigen::VectorXd u(model.num_dofs()), v(model.num_dofs());
+      for (int i = 0; i < model.num_dofs(); ++i) {
+        u[i] = d(rng);
+        v[i] = 10.0 * d(rng);
+      }
+      std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
+      for (int c = 0; c < model.num_cells(); c += 4) contact_cell[c] = 1;
+      const VonMises2 maxima = von_mises_maxima(model, u.data());
+      for (int m = 0; m < kStressMeasures; ++m) {
+        SCOPED_TRACE(std::string(element_name(kind)) + ", material " + std::to_string(material.index()) + ", measure " +
+                     std::to_string(m));
+        StressTracking tracking;
+        tracking.contact_cell = contact_cell.data();
+        tracking.measure = static_cast<StressMeasure>(m);
+        std::vector<double> cells_ref(model.num_cells()), cells(model.num_cells(), -1.0), cells_implicit(model.num_cells(), -1.0);
+        cell_von_mises(model, u.data(), tracking.measure, cells_ref.data());
+        Eigen::VectorXd f_ref(model.num_dofs()), f(model.num_dofs());
+        const ForceTotals ref = internal_forces(model, u.data(), v.data(), f_ref.data(), true, &tracking);
+        ASSERT_GT(ref.min_jacobian, 0.0);
+        const StressPeaks implicit_ref = stress_peaks(model, u.data(), tracking);
+
+        VonMises2 sampled{0.0, 0.0, 0.0}, sampled_implicit{0.0, 0.0, 0.0};
+        tracking.sampled_max = &sampled;
+        tracking.cell_von_mises = cells.data();
+        const ForceTotals got = internal_forces(model, u.data(), v.data(), f.data(), true, &tracking);
+        tracking.sampled_max = &sampled_implicit;
+        tracking.cell_von_mises = cells_implicit.data();
+        const StressPeaks implicit_got = stress_peaks(model, u.data(), tracking);
+
+        ASSERT_GT(maxima[m], 0.0);
+        for (int k = 0; k < kStressMeasures; ++k) {
+          EXPECT_TRUE(near(std::sqrt(sampled[k]), maxima[k])) << k << ": " << std::sqrt(sampled[k]) << " vs " << maxima[k];
+          EXPECT_TRUE(near(std::sqrt(sampled_implicit[k]), maxima[k])) << k;
+        }
+        for (int c = 0; c < model.num_cells(); ++c) {
+          EXPECT_TRUE(near(cells[c], cells_ref[c])) << "cell " << c << ": " << cells[c] << " vs " << cells_ref[c];
+          EXPECT_TRUE(near(cells_implicit[c], cells_ref[c])) << "cell " << c;
+        }
+        EXPECT_EQ(f, f_ref);
+        EXPECT_EQ(got.strain_energy, ref.strain_energy);
+        EXPECT_EQ(got.stress.all_cell, ref.stress.all_cell);
+        EXPECT_EQ(got.stress.interior_cell, ref.stress.interior_cell);
+        EXPECT_TRUE(near(got.stress.all, ref.stress.all));
+        EXPECT_TRUE(near(got.stress.interior, ref.stress.interior));
+        EXPECT_EQ(implicit_got.all_cell, implicit_ref.all_cell);
+        EXPECT_EQ(implicit_got.interior_cell, implicit_ref.interior_cell);
+        EXPECT_TRUE(near(implicit_got.all, implicit_ref.all));
+      }
+    }
 }
 
 }  // namespace

@@ -10,20 +10,30 @@ namespace {
 
 // The force pass (element_kernels.hpp): P = first_piola(F) at each point and, with kStress
 // (0 = no stresses, else 1 + the measure, so that each measure's kernel is its own), the von
-// Mises peak of each cell over its points above the threshold.
-template <bool kEnergy_, int kStress>
+// Mises peak of each cell over its points above the threshold. With kSample (a history sample
+// or a field snapshot: StressTracking::samples()) every point's equivalents are exact and the
+// pass also fills sampled_max and cell_von_mises, with the arithmetic of von_mises_maxima()
+// and cell_von_mises(), so the values are theirs.
+template <bool kEnergy_, int kStress, bool kSample>
 struct ForcePass {
+  static_assert(!kSample || kStress > 0, "a sample pass ranks the stresses too");
   static constexpr bool kEnergy = kEnergy_;
   static constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
   StressPeaks peaks;
   double threshold = 0.0;
   const std::uint8_t* contact_cell = nullptr;
   VonMisesRatio vm2;  // the cell's largest so far (cells of several points)
+  VonMises2 sampled{0.0, 0.0, 0.0};  // kSample: per measure, the largest so far [Pa^2]
+  double cell_max = 0.0;             // kSample: the cell's largest of `measure` so far [Pa^2]
+  VonMises2* sampled_max = nullptr;
+  double* cell_von_mises = nullptr;
 
   ForcePass(const StressTracking* tracking, const ForceTotals& t)
       : peaks(t.stress),
         threshold(tracking ? tracking->threshold : 0.0),
-        contact_cell(tracking ? tracking->contact_cell : nullptr) {}
+        contact_cell(tracking ? tracking->contact_cell : nullptr),
+        sampled_max(tracking ? tracking->sampled_max : nullptr),
+        cell_von_mises(tracking ? tracking->cell_von_mises : nullptr) {}
 
   struct Response {
     Mat2 P;
@@ -34,22 +44,35 @@ struct ForcePass {
   }
   void begin_element() {
     if constexpr (kStress) vm2 = VonMisesRatio{};
+    if constexpr (kSample) cell_max = 0.0;
   }
   // One-point cells are ranked by their point; cells of several points by the largest of
   // their points, at the end of the cell.
   template <int kPoints, class Mat, class Rows>
   EIGEN_ALWAYS_INLINE void point(const Mat& mat, const Mat2& F, double det_f, const Response& r, const Rows&,
                                  double, int cell) {
-    if constexpr (kStress) {
-      if (von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold)) {
-        if constexpr (kPoints == 1) {
-          peaks.add(von_mises_ratio(mat, F, r.P, det_f, measure), cell, contact_cell[cell] != 0);
-        } else {
-          const VonMisesRatio x = von_mises_ratio(mat, F, r.P, det_f, measure);
-          if (ratio_greater(x, vm2)) vm2 = x;
-        }
+    if constexpr (kSample) {
+      // Every measure exactly (as von_mises_squared), the run's own as a ratio for the ranking.
+      VonMisesRatio x;
+      for (int m = 0; m < kStressMeasures; ++m) {
+        const VonMisesRatio rm = von_mises_ratio(mat, F, r.P, det_f, static_cast<StressMeasure>(m));
+        sampled[m] = std::max(sampled[m], rm.value());
+        if (m == static_cast<int>(measure)) x = rm;
       }
+      cell_max = std::max(cell_max, x.value());
+      if (!von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold)) return;
+      rank<kPoints>(x, cell);
+    } else if constexpr (kStress) {
+      if (von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold))
+        rank<kPoints>(von_mises_ratio(mat, F, r.P, det_f, measure), cell);
     }
+  }
+  template <int kPoints>
+  EIGEN_ALWAYS_INLINE void rank(const VonMisesRatio& x, int cell) {
+    if constexpr (kPoints == 1)
+      peaks.add(x, cell, contact_cell[cell] != 0);
+    else if (ratio_greater(x, vm2))
+      vm2 = x;
   }
   template <class Gamma>
   void hourglass(const Gamma&, double, bool) {}
@@ -58,15 +81,23 @@ struct ForcePass {
     if constexpr (kStress && kPoints > 1) {
       if (vm2.num > 0.0) peaks.add(vm2, cell, contact_cell[cell] != 0);
     }
+    if constexpr (kSample) {
+      if (cell_von_mises) cell_von_mises[cell] = std::sqrt(cell_max);
+    }
   }
-  void finish(ForceTotals& t) const { t.stress = peaks; }
+  void finish(ForceTotals& t) const {
+    t.stress = peaks;
+    if constexpr (kSample) {
+      if (sampled_max) max_into(*sampled_max, sampled);
+    }
+  }
 };
 
-template <bool kEnergy, int kStress>
+template <bool kEnergy, int kStress, bool kSample = false>
 void all_blocks(const Model& model, const double* u, const double* v, double* f, const StressTracking* cc,
                 ForceTotals& t) {
   for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
-    element_kernel<decltype(viscous)::value>(b, mat, u, v, f, ForcePass<kEnergy, kStress>(cc, t), t);
+    element_kernel<decltype(viscous)::value>(b, mat, u, v, f, ForcePass<kEnergy, kStress, kSample>(cc, t), t);
   });
 }
 
@@ -78,20 +109,25 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
   ForceTotals t;
   if (stress) t.stress.all = t.stress.interior = stress->threshold;  // only cells above it are ranked
   // kStress: 0 = no stresses, else 1 + the measure, so that each measure's kernel is its own.
-  auto run = [&]<bool kEnergy>() {
-    if (!stress)
-      all_blocks<kEnergy, 0>(model, u, v, f_int, stress, t);
-    else if (stress->measure == StressMeasure::pk2)
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::pk2)>(model, u, v, f_int, stress, t);
-    else if (stress->measure == StressMeasure::kirchhoff)
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::kirchhoff)>(model, u, v, f_int, stress, t);
-    else
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::cauchy)>(model, u, v, f_int, stress, t);
+  // A sample pass always sums the energies (a sample is a monitor step): no kernels for the
+  // sample without them.
+  auto run = [&]<bool kEnergy, bool kSample>() {
+    if (!stress) {
+      if constexpr (!kSample) all_blocks<kEnergy, 0>(model, u, v, f_int, stress, t);
+    } else if (stress->measure == StressMeasure::pk2) {
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::pk2), kSample>(model, u, v, f_int, stress, t);
+    } else if (stress->measure == StressMeasure::kirchhoff) {
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::kirchhoff), kSample>(model, u, v, f_int, stress, t);
+    } else {
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::cauchy), kSample>(model, u, v, f_int, stress, t);
+    }
   };
-  if (with_energy)
-    run.template operator()<true>();
+  if (stress && stress->samples())
+    run.template operator()<true, true>();  // energies too: see above
+  else if (with_energy)
+    run.template operator()<true, false>();
   else
-    run.template operator()<false>();
+    run.template operator()<false, false>();
   return t;
 }
 
@@ -154,9 +190,20 @@ void cell_von_mises(const Model& model, const double* u, StressMeasure measure, 
 StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress) {
   StressPeaks p;
   const int m = static_cast<int>(stress.measure);
-  for_each_cell_stress(model, u, one_measure(stress.measure), [&](int cell, const VonMises2& vm2) {
+  auto rank = [&](int cell, const VonMises2& vm2) {
     p.add(VonMisesRatio{vm2[m], 1.0}, cell, stress.contact_cell && stress.contact_cell[cell] != 0);
+  };
+  if (!stress.samples()) {
+    for_each_cell_stress(model, u, one_measure(stress.measure), rank);
+    return p;
+  }
+  VonMises2 sampled{0.0, 0.0, 0.0};
+  for_each_cell_stress(model, u, all_measures, [&](int cell, const VonMises2& vm2) {
+    rank(cell, vm2);
+    max_into(sampled, vm2);
+    if (stress.cell_von_mises) stress.cell_von_mises[cell] = std::sqrt(vm2[m]);
   });
+  if (stress.sampled_max) max_into(*stress.sampled_max, sampled);
   return p;
 }
 

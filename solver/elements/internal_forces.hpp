@@ -14,6 +14,13 @@ struct StressTracking {
   const std::uint8_t* contact_cell = nullptr;  // per global cell, 1 on a contact boundary; never null
   StressMeasure measure = StressMeasure::cauchy;
   double threshold = 0.0;  // [Pa^2]: points that cannot exceed it are not ranked (0: rank all)
+  // What a history sample or a field snapshot asks of the same pass (null: nothing), so that
+  // it costs no second pass over the elements. Either makes every point's equivalents exact.
+  VonMises2* sampled_max = nullptr;  // folds in, per measure, the largest squared equivalent over
+                                     // every integration point [Pa^2]
+  double* cell_von_mises = nullptr;  // per global cell (model.num_cells()), the von Mises of
+                                     // `measure`, the largest over the cell's points [Pa]
+  bool samples() const { return sampled_max != nullptr || cell_von_mises != nullptr; }
 };
 
 struct ForceTotals {
@@ -29,7 +36,8 @@ struct ForceTotals {
 // With `with_energy` the strain and stored hourglass energies are summed as well. With
 // `stress` the pass also ranks the von Mises equivalents of stress->measure at every
 // integration point above stress->threshold (ForceTotals::stress; the cost:
-// bench/bench_element_forces.cpp).
+// bench/bench_element_forces.cpp), and fills what stress->sampled_max and
+// stress->cell_von_mises ask for (the values von_mises_maxima() and cell_von_mises() give).
 ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
                             bool with_energy, const StressTracking* stress = nullptr);
 
@@ -38,8 +46,8 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
 void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out);
 
 // The peaks internal_forces() tracks, by a stress pass alone (for the implicit scheme, whose
-// force passes are Newton iterates). `contact_cell` as `stress_cells` above; null: no cell is
-// on a contact boundary.
+// force passes are Newton iterates), and in the same pass what stress.sampled_max and
+// stress.cell_von_mises ask for. `contact_cell` null: no cell is on a contact boundary.
 StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress);
 
 // The largest von Mises stress of each measure over all cells and integration points [Pa].

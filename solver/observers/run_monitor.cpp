@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "solver/observers/observers.hpp"
@@ -173,6 +174,7 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   result.history.columns = history_columns(settings.probes);
   result.history.values.reserve(samples_.size() * result.history.columns.size());
   result.fields.reserve(field_steps_.size());
+  if (!field_steps_.empty()) field_cells_.assign(model.num_cells(), 0.0);
   monitor_every_ = std::max(1, settings.monitor_every);
   contact_cell_ = contact_boundary_cells(model, settings, contact.candidates);
   tracking_.contact_cell = contact_cell_.data();
@@ -186,13 +188,25 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
 
 const StressTracking* RunMonitor::stress_tracking(long n) {
   const bool sample = next_sample_ < samples_.size() && samples_[next_sample_] == n;
-  if (!sample && !settings_.stress_every_step) return nullptr;
+  const bool field = next_field_ < field_steps_.size() && field_steps_[next_field_] == n;
+  if (!sample && !field && !settings_.stress_every_step) return nullptr;
   const double peak = result_.von_mises_interior_peak.value;
-  tracking_.threshold = sample ? 0.0 : peak * peak;
+  // A field snapshot between samples without per-step tracking ranks nothing: von_mises_max
+  // then stays a maximum over the samples (RunSettings::stress_every_step).
+  tracking_.threshold = sample                        ? 0.0
+                        : settings_.stress_every_step ? peak * peak
+                                                      : std::numeric_limits<double>::max();
+  sampled_vm2_ = VonMises2{0.0, 0.0, 0.0};
+  tracking_.sampled_max = sample ? &sampled_vm2_ : nullptr;
+  tracking_.cell_von_mises = field ? field_cells_.data() : nullptr;
+  tracked_step_ = n;
   return &tracking_;
 }
 
 void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
+  if (s.step != tracked_step_) throw std::logic_error("RunMonitor: track_stress for another step than stress_tracking's");
+  sampled_step_ = tracking_.samples() ? s.step : -1;
+  if (!tracking_.sampled_max && !settings_.stress_every_step) return;  // a field snapshot's pass alone
   last_peaks_ = peaks;
   const double all = std::sqrt(peaks.all), interior = std::sqrt(peaks.interior);
   if (peaks.all_cell >= 0 && all > result_.von_mises_peak.value) {
@@ -262,8 +276,11 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
   const double error = energy_error(balance, result_.initial_energy, reference_energy_);
 
   if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
+    if (sampled_step_ != n) throw std::logic_error("RunMonitor: a history sample without its stress pass");
     const double vm = std::sqrt(last_peaks_.all);
-    max_into(result_.von_mises_sampled_max, von_mises_maxima(model_, s.u.data()));
+    VonMises2 sampled = sampled_vm2_;  // of this step's force (or stress) pass
+    for (double& x : sampled) x = std::sqrt(x);
+    max_into(result_.von_mises_sampled_max, sampled);
     const double depth = penetration(model_, settings_.obstacles, contact_, s.u);
     auto& v = result_.history.values;
     const HistoryInputs row{s, e, c, contact_.total, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
@@ -283,8 +300,8 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     f.u = s.u;
     f.v.resize(s.u.size());
     for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
-    f.von_mises.resize(model_.num_cells());
-    cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
+    if (sampled_step_ != n) throw std::logic_error("RunMonitor: a field snapshot without its stress pass");
+    f.von_mises = field_cells_;  // of this step's force (or stress) pass
     result_.fields.push_back(std::move(f));
     ++next_field_;
   }

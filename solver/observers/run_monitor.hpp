@@ -31,10 +31,16 @@ class RunMonitor {
   // cells with a node on a contact boundary (a contact candidate node, or a boundary node of a
   // body pair's master body), and as threshold the run's interior peak so far (only a new peak
   // matters), except at history samples, whose row holds the step's own peak (threshold 0).
-  // Null when the step needs no stresses (RunSettings::stress_every_step false, not a sample).
+  // At a history sample it also asks for every measure's maximum (summary's
+  // von_mises_sampled_max), at a field snapshot for the cells' values: the observers are
+  // computed in the step's own pass over the elements, none of their own.
+  // Null when the step needs no stresses (RunSettings::stress_every_step false, neither a
+  // sample nor a field snapshot).
   const StressTracking* stress_tracking(long n);
 
-  // Every step, before observe(): folds the peaks of the state s (t_n) into the run's maxima.
+  // Every step that stress_tracking(n) answered, after the pass and before observe(): folds
+  // the peaks of the state s (t_n) into the run's maxima, and keeps what the pass sampled.
+  // A scheme must call both at every step (observe() throws std::logic_error otherwise).
   void track_stress(const State& s, const StressPeaks& peaks);
 
   // Every step whose contact forces (the contact set's last step) act over [t_begin, t_begin + dt]:
@@ -62,6 +68,10 @@ class RunMonitor {
   std::vector<std::uint8_t> contact_cell_;
   StressTracking tracking_;
   StressPeaks last_peaks_;  // of the last track_stress()
+  VonMises2 sampled_vm2_{0.0, 0.0, 0.0};  // a sample's maxima per measure [Pa^2]
+  std::vector<double> field_cells_;       // a field snapshot's von Mises per cell [Pa]
+  long tracked_step_ = -1;                // the step stress_tracking() was last asked for
+  long sampled_step_ = -1;                // the step whose sample or field values are held
   std::chrono::steady_clock::time_point wall0_;
   std::clock_t cpu0_;
 };
