@@ -187,7 +187,7 @@ TEST_F(CliTest, RejectsBadThreads) {
   expect_rejected(kGood, "--set threads=2.0", {"--set threads", "expected an integer in [0, 256]"});
   // --threads: one line naming the command and the option, exit 2, nothing written.
   const std::string file = write("case.toml", kGood);
-  for (const std::string command : {"run", "stability"})
+  for (const std::string command : {"run", "stability", "sweep"})
     for (const std::string value : {"-1", "two", "1.5", "257", ""}) {
       const Outcome o = run(command + " " + file + " --out " + out() + " --threads '" + value + "'");
       EXPECT_EQ(o.status, 2) << command << " " << value << ": " << o.output;
@@ -280,7 +280,7 @@ TEST_F(CliTest, DivergedRunIsAResult) {
 TEST_F(CliTest, EveryCommandAnswersHelp) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> commands = {
       {"run", {"--set", "--threads", "--out", "--quiet"}},
-      {"sweep", {"--out", "--jobs", "--repeat", "--check", "--force", "--quiet"}},
+      {"sweep", {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet"}},
       {"check", {"--junit"}},
       {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
       {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},

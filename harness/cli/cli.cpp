@@ -80,6 +80,8 @@ class CommandLine {
                                "runs at the same time, 1 ... " + std::to_string(kMaxSweepJobs) +
                                    " (default 1: one at a time, for clean timings)")
                 ->type_name("N");
+    sweep_threads_ = threads(sweep_, sweep_threads_text_, "threads of every run, 0 ... " + std::to_string(kMaxThreads) +
+                                         "; 0 = all cores (default: 1 when --jobs > 1, else the case's own)");
     repeat_ = sweep_->add_option("--repeat", repeat_text_,
                                  "run each case K times, 1 ... 1000; summary.csv gets the median and the spread of the timings")
                   ->type_name("K");
@@ -158,6 +160,7 @@ class CommandLine {
     if (&c == sweep_) {
       if (jobs_->count()) sweep_cmd_.options.jobs = static_cast<int>(parse_integer("sweep", "--jobs", jobs_text_, 1, kMaxSweepJobs));
       if (repeat_->count()) sweep_cmd_.options.repeat = static_cast<int>(parse_integer("sweep", "--repeat", repeat_text_, 1, 1000));
+      if (sweep_threads_->count()) sweep_cmd_.options.threads = parse_threads("sweep", sweep_threads_text_);
       sweep_cmd_.options.out_dir = out_dir_;
       return run_command(sweep_cmd_, out);
     }
@@ -243,7 +246,7 @@ class CommandLine {
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
   CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr;
-  CLI::Option *run_threads_ = nullptr, *stability_threads_ = nullptr;
+  CLI::Option *run_threads_ = nullptr, *sweep_threads_ = nullptr, *stability_threads_ = nullptr;
   CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
   RunCommand run_cmd_;
   SweepCommand sweep_cmd_;
@@ -251,7 +254,7 @@ class CommandLine {
   StabilityCommand stability_cmd_;
   std::string out_dir_;  // sweep --out
   std::string jobs_text_, repeat_text_, tolerance_text_, max_runs_text_, end_text_, energy_bound_text_;
-  std::string run_threads_text_, stability_threads_text_;
+  std::string run_threads_text_, sweep_threads_text_, stability_threads_text_;
 };
 
 }  // namespace
