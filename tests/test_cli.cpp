@@ -3,6 +3,8 @@
 // output folder; the command line of every command (help, unknown options, every option shown).
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -129,7 +131,7 @@ TEST_F(CliTest, GoodCaseWritesDocumentedOutputs) {
   summary << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
   for (const char* key : {"\"status\": \"ok\"", "\"steps\": 100", "\"energy_error_max\"",
                           "\"penetration_max\"", "\"von_mises_max\"", "\"element_steps_per_second\"",
-                          "\"ricochet_version\""})
+                          "\"ricochet_version\"", "\"threads\""})
     EXPECT_NE(summary.str().find(key), std::string::npos) << key;
 }
 
@@ -140,6 +142,61 @@ TEST_F(CliTest, SetOverridesAKey) {
   std::stringstream summary;
   summary << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
   EXPECT_NE(summary.str().find("\"steps\": 50"), std::string::npos) << summary.str();
+}
+
+namespace {
+
+// The `threads` of a run's summary.json; -1 if absent.
+int summary_threads(const fs::path& dir) {
+  std::stringstream s;
+  s << std::ifstream(dir / "summary.json").rdbuf();
+  const std::string text = s.str(), key = "\"threads\": ";
+  const auto at = text.find(key);
+  return at == std::string::npos ? -1 : std::stoi(text.substr(at + key.size()));
+}
+
+}  // namespace
+
+// The threads a run uses: all cores by default, else the case key (file or --set), else --threads,
+// which wins over both; summary.json records the count used.
+TEST_F(CliTest, ThreadsComeFromTheCaseKeyAndTheOption) {
+  const std::string file = write("case.toml", kGood);
+  const std::string threaded = write("threaded.toml", "threads = 2\n" + kGood);
+  struct Case {
+    std::string args;
+    int threads;
+  };
+  for (const Case& c : std::vector<Case>{{file, omp_get_num_procs()},
+                                         {threaded, 2},
+                                         {file + " --set threads=1", 1},
+                                         {file + " --threads 3", 3},
+                                         {threaded + " --threads=1", 1},
+                                         {threaded + " --set threads=3 --threads 1", 1},
+                                         {threaded + " --threads 0", omp_get_num_procs()}}) {
+    fs::remove_all(out());
+    const Outcome o = run("run " + c.args + " --out " + out() + " --quiet");
+    ASSERT_EQ(o.status, 0) << c.args << ": " << o.output;
+    EXPECT_EQ(summary_threads(out()), c.threads) << c.args;
+  }
+}
+
+TEST_F(CliTest, RejectsBadThreads) {
+  for (const std::string value : {"-1", "1.5", "\"two\"", "257", "true"})
+    expect_rejected("threads = " + value + "\n" + kGood, "", {":1:", "threads", "expected an integer in [0, 256]"});
+  expect_rejected(kGood, "--set threads=-2", {"--set threads", "expected an integer in [0, 256]", "got -2"});
+  expect_rejected(kGood, "--set threads=2.0", {"--set threads", "expected an integer in [0, 256]"});
+  // --threads: one line naming the command and the option, exit 2, nothing written.
+  const std::string file = write("case.toml", kGood);
+  for (const std::string command : {"run", "stability", "sweep"})
+    for (const std::string value : {"-1", "two", "1.5", "257", ""}) {
+      const Outcome o = run(command + " " + file + " --out " + out() + " --threads '" + value + "'");
+      EXPECT_EQ(o.status, 2) << command << " " << value << ": " << o.output;
+      EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << command << " " << value << ": " << o.output;
+      EXPECT_NE(o.output.find("ricochet " + command + ": --threads: expected an integer in [0, 256]; got '" + value + "'"),
+                std::string::npos)
+          << o.output;
+      EXPECT_FALSE(fs::exists(out())) << command << " " << value;
+    }
 }
 
 TEST_F(CliTest, RejectsSyntaxError) { expect_rejected(kGood + "oops = \n", "", {":25:", "TOML"}); }
@@ -222,10 +279,10 @@ TEST_F(CliTest, DivergedRunIsAResult) {
 // (an option missing from its help would be a documentation defect).
 TEST_F(CliTest, EveryCommandAnswersHelp) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> commands = {
-      {"run", {"--set", "--out", "--quiet"}},
-      {"sweep", {"--out", "--jobs", "--repeat", "--check", "--force", "--quiet"}},
+      {"run", {"--set", "--threads", "--out", "--quiet"}},
+      {"sweep", {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet"}},
       {"check", {"--junit"}},
-      {"stability", {"--set", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
+      {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
       {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},
       {"plot", {"--out"}},
   };

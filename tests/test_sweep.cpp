@@ -5,6 +5,7 @@
 // with its check run (the oblique plate, shortened).
 #include <gtest/gtest.h>
 
+#include <omp.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -85,13 +87,14 @@ class SweepTest : public ::testing::Test {
   fs::path out() const { return dir_ / "out"; }
 
   SweepOutcome run(const std::string& sweep_text, int jobs = 1, int repeat = 1, bool force = false,
-                   const std::string& program = RICOCHET_BINARY) {
+                   const std::string& program = RICOCHET_BINARY, std::optional<int> threads = std::nullopt) {
     const SweepSpec spec = read_sweep(write("sweep.toml", sweep_text));
     SweepOptions o;
     o.out_dir = out();
     o.jobs = jobs;
     o.repeat = repeat;
     o.force = force;
+    o.threads = threads;
     o.executable = program;
     o.log = &log_;
     return run_sweep(spec, expand(spec), o);
@@ -561,6 +564,61 @@ set = { "bodies[0].thickness" = 2.0 }
 )";
   EXPECT_EQ(run(changed).executed, 4u);
   EXPECT_EQ(run(changed, 1, 1, true).executed, 4u);
+}
+
+// The threads of each child run (its summary.json, and the table's `threads` column): 1 when runs
+// run in parallel, all cores one at a time, --threads when given, the sweep file's `threads` over
+// the parallel default. Threads are not part of a run's identity: a sweep resumed with other
+// threads reuses its finished runs.
+TEST_F(SweepTest, ChildRunsGetOneThreadWhenRunsRunInParallel) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5, 4e-5] }
+)";
+  const std::vector<std::string> runs = {"g/000-time.dt=1e-5", "g/001-time.dt=2e-5", "g/002-time.dt=4e-5"};
+  auto threads_of = [&](const std::string& id) {
+    return read_json_file(out() / "runs" / id / "summary.json").at("threads").get<int>();
+  };
+  // `column`: summary.csv's column of the summaries' `threads` ("summary.threads" when the sweep
+  // file sets `threads`, whose own column holds the value it asks for).
+  auto expect_threads = [&](int expected, const std::string& column = "threads") {
+    const Table t = read_table(out() / "summary.csv");
+    for (const std::string& id : runs) {
+      EXPECT_EQ(threads_of(id), expected) << id;
+      EXPECT_EQ(t.row(id).at(column), std::to_string(expected)) << id;
+    }
+  };
+  ASSERT_EQ(run(sweep, 2).executed, 3u);
+  expect_threads(1);
+  EXPECT_EQ(read_text(out() / "runs" / runs[0] / "overrides.json").find("threads"), std::string::npos);
+  EXPECT_TRUE(read_json_file(out() / "sweep.json").at("threads").is_null());
+
+  // Resumed one at a time, or with --threads: nothing runs again.
+  EXPECT_EQ(run(sweep, 1).executed, 0u);
+  EXPECT_EQ(run(sweep, 2, 1, false, RICOCHET_BINARY, 2).executed, 0u);
+
+  ASSERT_EQ(run(sweep, 1, 1, true).executed, 3u);
+  expect_threads(omp_get_num_procs());
+  ASSERT_EQ(run(sweep, 2, 1, true, RICOCHET_BINARY, 2).executed, 3u);
+  expect_threads(2);
+  EXPECT_EQ(read_json_file(out() / "sweep.json").at("threads").get<int>(), 2);
+
+  // The sweep file's `threads` wins over the parallel default, and --threads over it.
+  const std::string with_threads = R"(
+base = "case.toml"
+set = { threads = 3 }
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5, 4e-5] }
+)";
+  EXPECT_EQ(run(with_threads, 2).executed, 0u) << "`threads` is not part of a run's identity";
+  ASSERT_EQ(run(with_threads, 2, 1, true).executed, 3u);
+  expect_threads(3, "summary.threads");
+  ASSERT_EQ(run(with_threads, 2, 1, true, RICOCHET_BINARY, 1).executed, 3u);
+  expect_threads(1, "summary.threads");
+  EXPECT_EQ(read_table(out() / "summary.csv").row(runs[0]).at("threads"), "3");
 }
 
 TEST_F(SweepTest, ResumeRerunsOnlyTheRunsOfAChangedBase) {

@@ -13,6 +13,7 @@
 #include "harness/input/input_error.hpp"
 #include "harness/stability/stability.hpp"
 #include "harness/sweeps/sweep.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 namespace {
@@ -21,13 +22,20 @@ constexpr const char* kAllowed = "run, sweep, check, stability, report, plot, --
 
 // ---- values ----------------------------------------------------------------------------------
 
-long parse_count(const std::string& flag, const std::string& v, long hi) {
+// The integer value of option `flag` of `command`, in [lo, hi]; else one line naming both.
+long parse_integer(const std::string& command, const std::string& flag, const std::string& v, long lo, long hi) {
   char* end = nullptr;
   errno = 0;
   const long x = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || errno != 0 || x < 1 || x > hi)
-    throw InputError("ricochet sweep: " + flag + ": expected an integer in [1, " + std::to_string(hi) + "]; got '" + v + "'");
+  if (v.empty() || *end != '\0' || errno != 0 || x < lo || x > hi)
+    throw InputError("ricochet " + command + ": " + flag + ": expected an integer in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "]; got '" + v + "'");
   return x;
+}
+
+// --threads N of `command`: 0 (all cores) ... kMaxThreads, as the case key `threads`.
+int parse_threads(const std::string& command, const std::string& v) {
+  return static_cast<int>(parse_integer(command, "--threads", v, 0, kMaxThreads));
 }
 
 double parse_number(const std::string& flag, const std::string& text, const char* expected) {
@@ -59,6 +67,8 @@ class CommandLine {
                    "exit status: 0 ok, 3 diverged (outputs written), 2 bad input (nothing written), 1 other error");
     run_->add_option("CASE.toml", run_cmd_.case_file, "the case file");
     sets(run_, run_cmd_.sets, "override a case key, e.g. --set time.dt=1e-6 --set mesh=M2 (repeatable)");
+    run_threads_ = threads(run_, run_threads_text_, "threads of the run, 0 ... " + std::to_string(kMaxThreads) +
+                                     "; 0 = all cores (default: the case key `threads`, else 0); results do not depend on it");
     run_->add_option("--out", run_cmd_.out_dir, "output folder (default: results/<case name>)")->type_name("DIR");
     run_->add_flag("-q,--quiet", run_cmd_.quiet, "no progress and no summary line");
 
@@ -70,6 +80,8 @@ class CommandLine {
                                "runs at the same time, 1 ... " + std::to_string(kMaxSweepJobs) +
                                    " (default 1: one at a time, for clean timings)")
                 ->type_name("N");
+    sweep_threads_ = threads(sweep_, sweep_threads_text_, "threads of every run, 0 ... " + std::to_string(kMaxThreads) +
+                                         "; 0 = all cores (default: 1 when --jobs > 1, else the case's own)");
     repeat_ = sweep_->add_option("--repeat", repeat_text_,
                                  "run each case K times, 1 ... 1000; summary.csv gets the median and the spread of the timings")
                   ->type_name("K");
@@ -91,6 +103,8 @@ class CommandLine {
                          "exit status: 0 bracket found, 5 no unstable dt up to the cap, 4 no bracket, 2 bad input, 1 other error");
     stability_->add_option("CASE.toml", stability_cmd_.case_file, "the case file");
     sets(stability_, stability_cmd_.sets, "override a case key (as for `ricochet run`; repeatable)");
+    stability_threads_ = threads(stability_, stability_threads_text_, "threads of every trial run, 0 ... " + std::to_string(kMaxThreads) +
+                                                 "; 0 = all cores (default: the case key `threads`, else 0)");
     stability_->add_option("--out", stability_cmd_.out_dir,
                            "write DIR/stability.json and each trial's DIR/trials/NN/summary.json, history.csv")
         ->type_name("DIR");
@@ -139,10 +153,14 @@ class CommandLine {
     if (const Script* s = script_of(c)) run_script(s->file, c.remaining());
     check_arguments(c, app_.remaining());
 
-    if (&c == run_) return run_command(run_cmd_);
+    if (&c == run_) {
+      if (run_threads_->count()) run_cmd_.threads = parse_threads("run", run_threads_text_);
+      return run_command(run_cmd_);
+    }
     if (&c == sweep_) {
-      if (jobs_->count()) sweep_cmd_.options.jobs = static_cast<int>(parse_count("--jobs", jobs_text_, kMaxSweepJobs));
-      if (repeat_->count()) sweep_cmd_.options.repeat = static_cast<int>(parse_count("--repeat", repeat_text_, 1000));
+      if (jobs_->count()) sweep_cmd_.options.jobs = static_cast<int>(parse_integer("sweep", "--jobs", jobs_text_, 1, kMaxSweepJobs));
+      if (repeat_->count()) sweep_cmd_.options.repeat = static_cast<int>(parse_integer("sweep", "--repeat", repeat_text_, 1, 1000));
+      if (sweep_threads_->count()) sweep_cmd_.options.threads = parse_threads("sweep", sweep_threads_text_);
       sweep_cmd_.options.out_dir = out_dir_;
       return run_command(sweep_cmd_, out);
     }
@@ -150,6 +168,7 @@ class CommandLine {
       if (junit_->count() && check_cmd_.junit.empty()) throw InputError("ricochet check: --junit needs a non-empty file name");
       return run_command(check_cmd_, out);
     }
+    if (stability_threads_->count()) stability_cmd_.threads = parse_threads("stability", stability_threads_text_);
     StabilityOptions& opt = stability_cmd_.options;
     if (tolerance_->count()) opt.tolerance = parse_number("--tolerance", tolerance_text_, "a number in (0, 10]");
     if (energy_bound_->count()) opt.energy_bound = parse_number("--energy-bound", energy_bound_text_, "a number > 0");
@@ -173,6 +192,11 @@ class CommandLine {
 
   static void sets(CLI::App* c, std::vector<std::string>& into, const std::string& help) {
     c->add_option("--set", into, help)->type_name("KEY=VALUE")->expected(1)->take_all();
+  }
+
+  // --threads N, read as text and checked by parse_threads (one error line for any bad value).
+  static CLI::Option* threads(CLI::App* c, std::string& into, const std::string& help) {
+    return c->add_option("--threads", into, help)->type_name("N");
   }
 
   // The words CLI11 left over (`after_dashes`: those after "--" that no positional took): an
@@ -222,6 +246,7 @@ class CommandLine {
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
   CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr;
+  CLI::Option *run_threads_ = nullptr, *sweep_threads_ = nullptr, *stability_threads_ = nullptr;
   CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
   RunCommand run_cmd_;
   SweepCommand sweep_cmd_;
@@ -229,6 +254,7 @@ class CommandLine {
   StabilityCommand stability_cmd_;
   std::string out_dir_;  // sweep --out
   std::string jobs_text_, repeat_text_, tolerance_text_, max_runs_text_, end_text_, energy_bound_text_;
+  std::string run_threads_text_, sweep_threads_text_, stability_threads_text_;
 };
 
 }  // namespace

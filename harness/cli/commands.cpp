@@ -48,7 +48,8 @@ class ProgressLine {
 }  // namespace
 
 int run_command(const RunCommand& c) {
-  const CaseSpec spec = read_case(c.case_file, c.sets);
+  CaseSpec spec = read_case(c.case_file, c.sets);
+  if (c.threads) spec.threads = *c.threads;
   const PreparedCase pc = prepare_case(spec);
   const std::string out_dir = c.out_dir.empty() ? "results/" + spec.name : c.out_dir;
 

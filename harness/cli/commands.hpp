@@ -2,15 +2,17 @@
 // harness/cli/cli.hpp; the other commands' bodies are in sweep.hpp, gates.hpp and stability.hpp).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace ricochet {
 
-// `ricochet run CASE.toml [--set KEY=VALUE]... [--out DIR] [--quiet]`.
+// `ricochet run CASE.toml [--set KEY=VALUE]... [--threads N] [--out DIR] [--quiet]`.
 struct RunCommand {
   std::string case_file;
   std::vector<std::string> sets;  // --set KEY=VALUE, in order
+  std::optional<int> threads;     // --threads N: replaces the case key `threads` (after --set)
   std::string out_dir;            // empty: results/<case name>
   bool quiet = false;             // no progress and no summary line
 };

@@ -4,6 +4,7 @@
 
 #include "harness/input/case_spec.hpp"
 #include "harness/input/toml_reader.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 namespace {
@@ -228,6 +229,7 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
                                                                               : PlaneMode::strain;
   c.gravity = root.vec2("gravity", Vec2::Zero());
   c.default_mesh = root.text("mesh", "");
+  c.threads = static_cast<int>(root.integer("threads", 0, 0, kMaxThreads));
 
   const std::filesystem::path dir = std::filesystem::path(file).parent_path();
   const auto meshes = root.table("meshes");

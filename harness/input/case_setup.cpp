@@ -106,6 +106,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   s.stress_every_step = c.stress_every_step;
   s.energy_growth_limit = c.energy_growth_limit;
   s.monitor_every = c.monitor_every;
+  s.threads = c.threads;
 
   std::map<int, std::string> prescribed_by;  // dof -> boundary key, to reject conflicts
   for (const BoundarySpec& b : c.boundaries) {

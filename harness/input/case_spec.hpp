@@ -137,6 +137,8 @@ struct CaseSpec {
 
   double energy_growth_limit = 2.0;  // [-]
   int monitor_every = 50;            // [steps]
+
+  int threads = 0;  // OpenMP threads of the run: 0 = all cores, else 1 ... kMaxThreads (threads.hpp)
 };
 
 // Parses FILE, applies the --set overrides ("key=value", TOML value syntax, or a bare word

@@ -279,7 +279,8 @@ int run_command(const StabilityCommand& c) {
   const bool quiet = c.quiet;
   check_stability_options(opt);
 
-  const CaseSpec spec = read_case(c.case_file, c.sets);
+  CaseSpec spec = read_case(c.case_file, c.sets);
+  if (c.threads) spec.threads = *c.threads;
   const PreparedCase pc = prepare_case(spec);
 
   namespace fs = std::filesystem;

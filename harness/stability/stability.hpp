@@ -93,11 +93,12 @@ Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const
 // One line: case, scheme, mesh, the estimate, lo, hi, lo / estimate and the number of runs.
 std::string stability_summary_line(const PreparedCase& pc, const StabilityResult& r);
 
-// `ricochet stability CASE.toml [--set KEY=VALUE]... [--out DIR] [--tolerance REL]
+// `ricochet stability CASE.toml [--set KEY=VALUE]... [--threads N] [--out DIR] [--tolerance REL]
 //  [--max-runs N] [--end TIME] [--energy-bound E] [--quiet]`.
 struct StabilityCommand {
   std::string case_file;
   std::vector<std::string> sets;  // --set KEY=VALUE, in order
+  std::optional<int> threads;     // --threads N: replaces the case key `threads` of every trial
   std::string out_dir;            // empty: nothing written
   StabilityOptions options;
   bool quiet = false;             // no per-trial lines on stderr

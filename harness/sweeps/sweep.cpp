@@ -19,6 +19,7 @@
 #include "harness/input/input_error.hpp"
 #include "harness/outputs/run_outputs.hpp"
 #include "harness/sweeps/sweep_exec.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 namespace {
@@ -153,6 +154,7 @@ class Sweep {
     j["program"] = exe_.string();
     j["jobs"] = opt_.jobs;
     j["repeat"] = opt_.repeat;
+    j["threads"] = opt_.threads ? Json(*opt_.threads) : Json();
     j["force"] = opt_.force;
     j["started_at"] = started_at_;
     j["finished_at"] = finished ? Json(utc_now()) : Json();
@@ -211,6 +213,8 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
   if (options.jobs < 1 || options.jobs > kMaxSweepJobs)
     throw InputError("ricochet sweep: --jobs: expected an integer in [1, " + std::to_string(kMaxSweepJobs) + "]");
   if (options.repeat < 1) throw InputError("ricochet sweep: --repeat: expected an integer >= 1");
+  if (options.threads && (*options.threads < 0 || *options.threads > kMaxThreads))
+    throw InputError("ricochet sweep: --threads: expected an integer in [0, " + std::to_string(kMaxThreads) + "]");
   check_runs(spec, runs);
   if (fs::exists(options.out_dir) && !fs::is_directory(options.out_dir))
     throw InputError("ricochet sweep: --out " + options.out_dir.string() + ": not a folder");

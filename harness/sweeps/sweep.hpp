@@ -32,6 +32,8 @@ struct SweepOptions {
   std::filesystem::path out_dir;     // DIR (required)
   int jobs = 1;                      // runs at the same time, >= 1
   int repeat = 1;                    // times each run is repeated, >= 1
+  // --threads N for every run (0 = all cores); empty: SweepPlan::threads() decides per run.
+  std::optional<int> threads;
   bool force = false;                // rerun finished runs too
   bool quiet = false;                // no progress lines
   std::filesystem::path executable;  // the ricochet program to run; empty = /proc/self/exe
@@ -45,8 +47,8 @@ struct SweepOutcome {
   std::size_t ok = 0, diverged = 0, failed = 0;  // over all runs
 };
 
-// `ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--repeat K] [--check GATES.toml] [--force]
-// [--quiet]`.
+// `ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--threads N] [--repeat K] [--check GATES.toml]
+// [--force] [--quiet]`.
 struct SweepCommand {
   std::string file;        // SWEEP.toml
   std::string gates_file;  // --check GATES.toml; empty: no check

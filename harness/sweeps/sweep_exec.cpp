@@ -99,12 +99,13 @@ Exit decode(int status) {
   return {false, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
 }
 
-pid_t spawn_run(const fs::path& exe, const SweepRun& run, const fs::path& out) {
+pid_t spawn_run(const fs::path& exe, const SweepRun& run, std::optional<int> threads, const fs::path& out) {
   std::vector<std::string> args = {exe.string(), "run", run.base.string()};
   for (const auto& a : run.set_args()) {
     args.push_back("--set");
     args.push_back(a);
   }
+  if (threads) args.insert(args.end(), {"--threads", std::to_string(*threads)});
   args.insert(args.end(), {"--out", out.string(), "--quiet"});
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
@@ -207,7 +208,7 @@ void SweepExecution::start(Task& t) {
   const fs::path dir = plan_.repeat_dir(t.run, t.k);
   fs::create_directories(dir);
   t.started = Clock::now();
-  t.pid = spawn_run(program_, plan_.run(t.run), dir);
+  t.pid = spawn_run(program_, plan_.run(t.run), plan_.threads(t.run), dir);
 }
 
 void SweepExecution::begin(std::size_t i, std::vector<Task>& active) {

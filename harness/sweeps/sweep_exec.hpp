@@ -1,8 +1,9 @@
 // The execution of a sweep's runs (harness/sweeps/sweep.hpp): each run is the subprocess
-// `ricochet run BASE --set KEY=VALUE... --out FOLDER --quiet` (stdout to /dev/null, stderr to
-// FOLDER/stderr.txt), `jobs` at a time, each repeated as the plan says; SIGINT, SIGTERM and SIGHUP
-// are passed on to the running children. A finished run's record is filled from its summary.json
-// (or marked failed, with the reason), and a progress line is printed after each run.
+// `ricochet run BASE --set KEY=VALUE... [--threads N] --out FOLDER --quiet` (--threads as
+// SweepPlan::threads() says; stdout to /dev/null, stderr to FOLDER/stderr.txt), `jobs` at a
+// time, each repeated as the plan says; SIGINT, SIGTERM and SIGHUP are passed on to the running
+// children. A finished run's record is filled from its summary.json (or marked failed, with the
+// reason), and a progress line is printed after each run.
 #pragma once
 
 #include <chrono>

@@ -79,10 +79,19 @@ std::string SweepPlan::request(std::size_t i) const {
   j["base"] = run.base.string();
   j["base_fnv1a"] = base_hash_.at(run.base);
   Json o = Json::array();
-  for (const auto& a : run.set_args()) o.push_back(a);
+  for (const SweepValue& v : run.overrides)
+    if (v.key != "threads") o.push_back(v.set_arg());
   j["overrides"] = o;
   j["repeats"] = repeats(i);
   return dump_json(j);
+}
+
+std::optional<int> SweepPlan::threads(std::size_t i) const {
+  if (options_.threads) return options_.threads;
+  if (options_.jobs <= 1) return std::nullopt;
+  for (const SweepValue& v : runs_[i].overrides)
+    if (v.key == "threads") return std::nullopt;
+  return 1;
 }
 
 std::vector<std::size_t> SweepPlan::queue(const std::vector<RunRecord>& records) const {

@@ -49,8 +49,15 @@ class SweepPlan {
   // The outputs of repeat k (from 1) of run i: its folder, or folder/repeat-k when it repeats.
   std::filesystem::path repeat_dir(std::size_t i, int k) const;
   // The text of the run's overrides.json: its id, base case and the base's hash, its overrides
-  // and its number of repeats.
+  // and its number of repeats. Not its threads: they change the timings only, never the
+  // results, so a sweep resumed with another --jobs or --threads (or `threads` values) reuses
+  // its finished runs; each run's summary.json records the threads it used.
   std::string request(std::size_t i) const;
+  // The `--threads` given to run i's `ricochet run`: the sweep's --threads if set; else 1 when
+  // runs run in parallel (--jobs > 1) and the run's overrides do not set `threads`; else none
+  // (the run's case decides: its `threads` key, from the sweep file or the base case, else all
+  // cores).
+  std::optional<int> threads(std::size_t i) const;
 
   // The pending runs in the order they are started: reference runs first, so that runs compared
   // with them find them finished.

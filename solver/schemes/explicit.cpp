@@ -3,11 +3,15 @@
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
 #include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 
 RunResult run_explicit(const Model& model, const RunSettings& settings, const ProgressFn& progress) {
+  // The whole run, set-up included, uses the run's thread count.
+  const ThreadScope threads(settings.threads);
   RunResult result;
+  result.threads = threads.threads();
   State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement);
   // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
   // half of any contact impulse of the first step.

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 
@@ -451,7 +452,10 @@ bool ImplicitIntegrator::step(bool with_energy) {
 
 RunResult run_implicit(const Model& model, const RunSettings& settings, const ImplicitSettings& implicit,
                        const ProgressFn& progress) {
+  // The whole run, the integrator's set-up included, uses the run's thread count.
+  const ThreadScope threads(settings.threads);
   RunResult result;
+  result.threads = threads.threads();
   ImplicitIntegrator integrator(model, settings, implicit);
   const State& s = integrator.state();
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);

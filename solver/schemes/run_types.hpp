@@ -28,6 +28,9 @@ struct RunSettings {
   double energy_growth_limit = 2.0;  // diverged when total energy > limit * reference energy [-]
   int monitor_every = 50;            // divergence checks at least every this many steps
   Eigen::VectorXd initial_displacement;  // optional, 2n [m]
+  // OpenMP threads of the run's element loops: 0 = every core, n >= 1 = n (threads.hpp,
+  // resolve_threads). Results are the same for any count; only the time changes.
+  int threads = 0;
 
   // Rigid obstacles, with friction[b][o] the coefficient of body b against obstacle o. The
   // explicit loop treats contact by the bi-potential method (the semi-explicit scheme:
@@ -118,6 +121,7 @@ struct RunResult {
   long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
   long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
   bool direct_solver = false;      // implicit scheme: LDL^T (true) or PCG (false)
+  int threads = 0;                 // threads the run used: resolve_threads(settings.threads)
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time
   double element_steps_per_second = 0.0;

@@ -1,0 +1,149 @@
+// The threads of a run (solver/schemes/threads.hpp): resolve_threads() and ThreadScope, and that
+// every scheme's run uses RunSettings::threads while it runs, restores the caller's count,
+// records the count in RunResult::threads, and gives bitwise the same results for 1 and 2 threads.
+#include <gtest/gtest.h>
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "harness/input/case_setup.hpp"
+#include "solver/schemes/threads.hpp"
+
+namespace fs = std::filesystem;
+using namespace ricochet;
+
+namespace {
+
+// A block thrown obliquely onto a rigid line with friction: contact, sticking and sliding within
+// the run, so every part of a step (forces, contact, stress peaks) is exercised.
+const std::string kCase = R"(name = "block"
+mesh = "m"
+[meshes.m]
+generator = "rectangle"
+width = 0.1
+height = 0.05
+nx = 8
+ny = 4
+origin = [-0.05, 0.0005]
+[[bodies]]
+name = "b"
+velocity = [2.0, -5.0]
+[bodies.material]
+young = 1e8
+poisson = 0.3
+density = 1000.0
+[[obstacles]]
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+friction = 0.3
+[time]
+end = 1e-3
+dt = 1e-5
+[output]
+interval = 1e-4
+[[output.probes]]
+name = "P"
+point = [0.05, 0.0005]
+)";
+
+// The team count of a parallel region started here.
+int region_threads() {
+  int n = 0;
+#pragma omp parallel
+  {
+#pragma omp single
+    n = omp_get_num_threads();
+  }
+  return n;
+}
+
+// Restores the test process's OpenMP count after each test.
+class Threads : public ::testing::Test {
+ protected:
+  void SetUp() override { before_ = omp_get_max_threads(); }
+  void TearDown() override { omp_set_num_threads(before_); }
+  int before_ = 1;
+};
+
+}  // namespace
+
+TEST_F(Threads, ResolveGivesAllCoresForZeroAndTheCountOtherwise) {
+  EXPECT_EQ(resolve_threads(0), omp_get_num_procs());
+  EXPECT_EQ(resolve_threads(1), 1);
+  EXPECT_EQ(resolve_threads(3), 3);  // as given, even above the number of cores
+  EXPECT_EQ(resolve_threads(kMaxThreads), kMaxThreads);
+  EXPECT_EQ(resolve_threads(kMaxThreads + 1), kMaxThreads);
+  EXPECT_THROW(resolve_threads(-1), std::invalid_argument);
+}
+
+TEST_F(Threads, ScopeSetsTheCountAndRestoresTheOneBefore) {
+  omp_set_num_threads(3);
+  {
+    const ThreadScope scope(2);
+    EXPECT_EQ(scope.threads(), 2);
+    EXPECT_EQ(omp_get_max_threads(), 2);
+    EXPECT_EQ(region_threads(), 2);
+    {
+      const ThreadScope inner(0);
+      EXPECT_EQ(inner.threads(), omp_get_num_procs());
+      EXPECT_EQ(omp_get_max_threads(), omp_get_num_procs());
+    }
+    EXPECT_EQ(omp_get_max_threads(), 2);
+  }
+  EXPECT_EQ(omp_get_max_threads(), 3);
+  EXPECT_THROW(ThreadScope(-2), std::invalid_argument);
+  EXPECT_EQ(omp_get_max_threads(), 3);
+}
+
+// Each scheme with threads = 1 and 2: the count in force inside the run (seen from the progress
+// callback, which the loop calls at its monitor steps), the recorded count, the caller's count
+// afterwards, and the results bit for bit.
+TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
+  const fs::path file = fs::temp_directory_path() / ("ricochet_threads_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(file) << kCase;
+  for (const char* scheme : {"explicit_penalty", "semi_explicit", "implicit"}) {
+    SCOPED_TRACE(scheme);
+    const PreparedCase base = prepare_case(read_case(file.string(), {std::string("scheme=") + scheme}));
+    std::vector<RunResult> results;
+    for (const int threads : {1, 2}) {
+      PreparedCase pc = base;
+      pc.settings.threads = threads;
+      omp_set_num_threads(5);
+      std::vector<int> inside;
+      results.push_back(run_case(pc, [&](long, long, double) { inside.push_back(omp_get_max_threads()); }));
+      const RunResult& r = results.back();
+      EXPECT_EQ(omp_get_max_threads(), 5) << "the caller's count is restored";
+      EXPECT_EQ(r.threads, threads);
+      ASSERT_FALSE(inside.empty());
+      for (const int n : inside) EXPECT_EQ(n, threads);
+      ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+      EXPECT_GT(r.contact_steps, 0) << "the block must reach the line";
+    }
+    const RunResult &a = results[0], &b = results[1];
+    ASSERT_EQ(a.history.columns, b.history.columns);
+    ASSERT_EQ(a.history.values.size(), b.history.values.size());
+    EXPECT_EQ(std::memcmp(a.history.values.data(), b.history.values.data(), a.history.values.size() * sizeof(double)), 0)
+        << "history differs between 1 and 2 threads";
+    EXPECT_EQ(std::memcmp(&a.von_mises_max, &b.von_mises_max, sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&a.friction_dissipation, &b.friction_dissipation, sizeof(double)), 0);
+    EXPECT_EQ(a.steps, b.steps);
+  }
+  fs::remove(file);
+}
+
+// The default (0) is every core.
+TEST_F(Threads, DefaultRunUsesEveryCore) {
+  const fs::path file = fs::temp_directory_path() / ("ricochet_threads_default_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(file) << kCase;
+  const PreparedCase pc = prepare_case(read_case(file.string(), {"scheme=semi_explicit", "time.end=1e-4"}));
+  fs::remove(file);
+  EXPECT_EQ(pc.settings.threads, 0);
+  EXPECT_EQ(run_case(pc).threads, omp_get_num_procs());
+}
