@@ -1,6 +1,8 @@
 // Full explicit step without energies: evaluate() (internal forces, accelerations) then
 // update() (velocities, displacements), on an n x n-cell free plate vibrating from a small
 // smooth initial displacement and velocity, dt = 0.5 x model.critical_dt.
+// The step's force pass is the threaded one (State::force_scratch): one thread, or two for the
+// names ending in /threads:2, timed in wall time (the speed-up of the second core).
 // Reported: time per step, and element_steps_per_second = cells x steps per second
 // [cells/s] (items_per_second counts the same cells).
 #include <string>
@@ -8,6 +10,7 @@
 
 #include "bench/bench_common.hpp"
 #include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet::bench {
 namespace {
@@ -16,7 +19,8 @@ namespace {
 // never leaves the small-strain regime however many iterations the library picks.
 constexpr long reset_every = 1000;
 
-void explicit_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx) {
+void explicit_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx, int threads) {
+  const ThreadScope scope(threads);
   const Model& model = plate_model(element, material, nx);
   const std::vector<PrescribedDof> prescribed;
   const double dt = 0.5 * model.critical_dt;  // [s]
@@ -58,13 +62,15 @@ const bool registered = [] {
   };
   for (const Case c : {Case{ElementKind::q4_one_point_viscous, MaterialKind::st_venant_kirchhoff},
                        Case{ElementKind::q4_full_2x2, MaterialKind::st_venant_kirchhoff}})
-    for (const int nx : {16, 64, 256, 512}) {
-      const std::string name = "explicit_step/" + std::string(element_name(c.element)) + "/" +
-                               std::string(material_name(c.material)) + "/" +
-                               std::to_string(nx) + "x" + std::to_string(nx);
-      benchmark::RegisterBenchmark(name.c_str(), explicit_step, c.element, c.material, nx)
-          ->Unit(benchmark::kMicrosecond);
-    }
+    for (const int nx : {16, 64, 256, 512})
+      for (const int threads : {1, 2}) {
+        const std::string name = "explicit_step/" + std::string(element_name(c.element)) + "/" +
+                                 std::string(material_name(c.material)) + "/" + std::to_string(nx) + "x" +
+                                 std::to_string(nx) + (threads > 1 ? "/threads:2" : "");
+        auto* b = benchmark::RegisterBenchmark(name.c_str(), explicit_step, c.element, c.material, nx, threads)
+                      ->Unit(benchmark::kMicrosecond);
+        if (threads > 1) b->UseRealTime();
+      }
   return true;
 }();
 

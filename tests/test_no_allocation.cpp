@@ -12,7 +12,9 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <vector>
@@ -22,6 +24,7 @@
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet {
 namespace {
@@ -135,6 +138,37 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
       EXPECT_EQ(s.step, 70);
     }
   }
+}
+
+// The threaded force pass (two threads, a plate of more cells than kForceParallelChunks chunks
+// hold, so the chunks run in a parallel region): after the first step, which creates the
+// OpenMP runtime's thread team once per process, no step allocates, sample passes included.
+TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
+  const Mesh mesh = verification::grid_mesh(2.0, 1.0, 48, 24, 0.2, ElementKind::q4_full);
+  const Model model = verification::single_body_model(
+      mesh, StVenantKirchhoff::make(200e9, 0.3, 7800.0, PlaneMode::stress), PlaneMode::stress, ElementKind::q4_full, 0.01);
+  ASSERT_GE(model.num_cells(), static_cast<int>(kForceParallelChunks * kForceChunkCells));
+  const ThreadScope threads(2);
+  State s = initial_state(model, {}, 0.9 * model.critical_dt);
+  for (int i = 0; i < model.num_nodes(); ++i) s.v_half[2 * i + 1] = std::sin(3.0 * model.ref(0, i));
+  std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
+  std::vector<double> cells(model.num_cells());
+  VonMises2 sampled{0.0, 0.0, 0.0};
+  StressTracking tracking;
+  tracking.contact_cell = contact_cell.data();
+  evaluate(model, {}, s, true, &tracking);
+  update(s);
+  const long before = g_allocations.load();
+  for (int n = 0; n < 30; ++n) {
+    tracking.threshold = n % 2 == 0 ? 0.0 : 1e6;
+    tracking.sampled_max = n % 3 == 0 ? &sampled : nullptr;
+    tracking.cell_von_mises = n % 3 == 0 ? cells.data() : nullptr;
+    evaluate(model, {}, s, n % 3 == 0, n % 5 != 0 ? &tracking : nullptr);
+    update(s);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(sampled[0], 0.0);
+  EXPECT_GT(s.u.norm(), 0.0);
 }
 
 }  // namespace

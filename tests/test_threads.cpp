@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "harness/input/case_setup.hpp"
+#include "solver/elements/internal_forces.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace fs = std::filesystem;
@@ -105,12 +106,36 @@ TEST_F(Threads, ScopeSetsTheCountAndRestoresTheOneBefore) {
 // Each scheme with threads = 1 and 2: the count in force inside the run (seen from the progress
 // callback, which the loop calls at its monitor steps), the recorded count, the caller's count
 // afterwards, and the results bit for bit.
+// The small block runs the force pass on one thread whatever the count (fewer cells than
+// kForceParallelChunks chunks); the fine variants (64 x 20 cells of each formulation, in the
+// explicit schemes, whose force pass is the threaded one) run its chunks in parallel.
 TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
   const fs::path file = fs::temp_directory_path() / ("ricochet_threads_" + std::to_string(getpid()) + ".toml");
   std::ofstream(file) << kCase;
-  for (const char* scheme : {"explicit_penalty", "semi_explicit", "implicit"}) {
-    SCOPED_TRACE(scheme);
-    const PreparedCase base = prepare_case(read_case(file.string(), {std::string("scheme=") + scheme}));
+  struct Variant {
+    const char* scheme;
+    std::vector<std::string> set;
+  };
+  const std::vector<std::string> fine = {"meshes.m.nx=64", "meshes.m.ny=20", "time.end=3e-4", "time.dt=2e-6"};
+  auto with = [&](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  const std::vector<Variant> variants = {
+      {"explicit_penalty", {}},
+      {"semi_explicit", {}},
+      {"implicit", {}},
+      {"semi_explicit", fine},
+      {"explicit_penalty", with(fine, {"bodies[0].element=q4_hourglass"})},
+      {"semi_explicit", with(fine, {"meshes.m.cells=tri"})},
+  };
+  for (const Variant& variant : variants) {
+    const char* scheme = variant.scheme;
+    SCOPED_TRACE(std::string(scheme) + (variant.set.empty() ? "" : ", " + variant.set.back()));
+    const PreparedCase base =
+        prepare_case(read_case(file.string(), with({std::string("scheme=") + scheme}, variant.set)));
+    if (!variant.set.empty())
+      EXPECT_GE(static_cast<std::size_t>(base.model.num_cells()), kForceParallelChunks * kForceChunkCells);
     std::vector<RunResult> results;
     for (const int threads : {1, 2}) {
       PreparedCase pc = base;

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 #include <variant>
 
@@ -41,8 +42,31 @@ void for_each_block(const Model& model, Fn&& fn) {
     std::visit([&](const auto& mat) { fn(b, mat, std::false_type{}); }, b.material);
 }
 
-// The element kernels: element_kernel<kViscous>(block, material, u, v, f, pass, t) adds
-// f_int(u, v) of the block's cells into f and its totals into t (the strain energy and the
+// Where a kernel puts each cell's nodal forces fe (N x 2): added into the global array f
+// (DirectScatter), or stored at the cell's place in a buffer of 2N values per cell
+// (ElementStore: the threaded force pass, which sums them per node afterwards).
+struct DirectScatter {
+  double* f;
+  template <int N>
+  EIGEN_ALWAYS_INLINE void put(std::size_t, const std::array<int, N>& c, const Eigen::Matrix<double, N, 2>& fe) const {
+    scatter<N>(f, c, fe);
+  }
+};
+struct ElementStore {
+  double* out;  // this block's first cell's entries
+  template <int N>
+  EIGEN_ALWAYS_INLINE void put(std::size_t e, const std::array<int, N>&, const Eigen::Matrix<double, N, 2>& fe) const {
+    double* o = out + 2 * N * e;
+    for (int i = 0; i < N; ++i) {
+      o[2 * i] = fe(i, 0);
+      o[2 * i + 1] = fe(i, 1);
+    }
+  }
+};
+
+// The element kernels: element_kernel<kViscous>(block, material, u, v, out, pass, t, e0, e1)
+// puts f_int(u, v) of the block's cells e0 <= e < e1 (all by default) through `out` and adds
+// their totals into t (the strain energy and the
 // stored hourglass energy only with Pass::kEnergy; the hourglass power; the smallest det F).
 // `pass` is copied, so that its state stays in registers; it provides
 //   static constexpr bool kEnergy
@@ -62,21 +86,22 @@ void for_each_block(const Model& model, Fn&& fn) {
 // (bench/bench_element_forces.cpp).
 
 // T3: constant gradients, one point.
-template <bool kViscous, class Pass, class Mat>
+template <bool kViscous, class Pass, class Mat, class Out>
 [[gnu::noinline, gnu::flatten]] void element_kernel(const T3Block& b, const Mat& material, const double* u,
-                                                    const double*, double* f, const Pass& pass_in,
-                                                    ForceTotals& t) {
+                                                    const double*, const Out& out, const Pass& pass_in,
+                                                    ForceTotals& t, std::size_t e0 = 0,
+                                                    std::size_t e1 = SIZE_MAX) {
   const Mat mat = material;  // a local copy: its constants cannot alias f, so they stay in registers
   Pass pass = pass_in;
   double energy = 0.0, min_j = t.min_jacobian;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+  for (std::size_t e = e0, end = std::min(e1, b.conn.size()); e < end; ++e) {
     const T3Geom& g = b.geom[e];
     const Grad3 ue = gather<3>(u, b.conn[e]);
     const Mat2 F = deformation_gradient<3>(ue, g.dndx);
     const double det_f = F.determinant();
     min_j = std::min(min_j, det_f);
     const auto r = pass.response(mat, F);
-    scatter<3>(f, b.conn[e], g.vol * g.dndx * r.P.transpose());
+    out.template put<3>(e, b.conn[e], g.vol * g.dndx * r.P.transpose());
     if constexpr (Pass::kEnergy) energy += g.vol * mat.energy_density(F);
     const int cell = b.first_cell + static_cast<int>(e);
     pass.begin_element();
@@ -89,14 +114,15 @@ template <bool kViscous, class Pass, class Mat>
 }
 
 // Q4 2x2: the four Gauss points.
-template <bool kViscous, class Pass, class Mat>
+template <bool kViscous, class Pass, class Mat, class Out>
 [[gnu::noinline, gnu::flatten]] void element_kernel(const Q4FullBlock& b, const Mat& material, const double* u,
-                                                    const double*, double* f, const Pass& pass_in,
-                                                    ForceTotals& t) {
+                                                    const double*, const Out& out, const Pass& pass_in,
+                                                    ForceTotals& t, std::size_t e0 = 0,
+                                                    std::size_t e1 = SIZE_MAX) {
   const Mat mat = material;  // see above
   Pass pass = pass_in;
   double energy = 0.0, min_j = t.min_jacobian;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+  for (std::size_t e = e0, end = std::min(e1, b.conn.size()); e < end; ++e) {
     const Q4FullGeom& g = b.geom[e];
     const Grad4 ue = gather<4>(u, b.conn[e]);
     const int cell = b.first_cell + static_cast<int>(e);
@@ -111,7 +137,7 @@ template <bool kViscous, class Pass, class Mat>
       if constexpr (Pass::kEnergy) energy += g.vol[q] * mat.energy_density(F);
       pass.template point<4>(mat, F, det_f, r, g.dndx[q], g.vol[q], cell);
     }
-    scatter<4>(f, b.conn[e], fe);
+    out.template put<4>(e, b.conn[e], fe);
     pass.template end_element<4>(e, cell);
   }
   t.strain_energy += energy;
@@ -121,14 +147,15 @@ template <bool kViscous, class Pass, class Mat>
 
 // Q4 one-point: the mean gradients at the centroid, plus Flanagan-Belytschko hourglass forces
 // q = sum_I gamma_I a_I, Q = c q, f_I += gamma_I Q (model.hpp), with a = v (viscous) or u.
-template <bool kViscous, class Pass, class Mat>
+template <bool kViscous, class Pass, class Mat, class Out>
 [[gnu::noinline, gnu::flatten]] void element_kernel(const Q4HourglassBlock& b, const Mat& material,
-                                                    const double* u, const double* v, double* f,
-                                                    const Pass& pass_in, ForceTotals& t) {
+                                                    const double* u, const double* v, const Out& out,
+                                                    const Pass& pass_in, ForceTotals& t, std::size_t e0 = 0,
+                                                    std::size_t e1 = SIZE_MAX) {
   const Mat mat = material;  // see above
   Pass pass = pass_in;
   double energy = 0.0, hg_energy = 0.0, hg_power = 0.0, min_j = t.min_jacobian;
-  for (std::size_t e = 0; e < b.conn.size(); ++e) {
+  for (std::size_t e = e0, end = std::min(e1, b.conn.size()); e < end; ++e) {
     const Q4HourglassGeom& g = b.geom[e];
     const Grad4 ue = gather<4>(u, b.conn[e]);
     const Mat2 F = deformation_gradient<4>(ue, g.dndx);
@@ -150,7 +177,7 @@ template <bool kViscous, class Pass, class Mat>
       if constexpr (Pass::kEnergy) hg_energy += 0.5 * g.hourglass_coeff * q.squaredNorm();
     }
     pass.hourglass(g.gamma, g.hourglass_coeff, kViscous);
-    scatter<4>(f, b.conn[e], fe);
+    out.template put<4>(e, b.conn[e], fe);
     pass.template end_element<1>(e, cell);
     if constexpr (Pass::kEnergy) energy += g.vol * mat.energy_density(F);
   }

@@ -2,6 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+#include <type_traits>
+
+#include <omp.h>
 
 #include "solver/elements/element_kernels.hpp"
 
@@ -25,14 +31,12 @@ struct ForcePass {
   VonMisesRatio vm2;  // the cell's largest so far (cells of several points)
   VonMises2 sampled{0.0, 0.0, 0.0};  // kSample: per measure, the largest so far [Pa^2]
   double cell_max = 0.0;             // kSample: the cell's largest of `measure` so far [Pa^2]
-  VonMises2* sampled_max = nullptr;
   double* cell_von_mises = nullptr;
 
   ForcePass(const StressTracking* tracking, const ForceTotals& t)
       : peaks(t.stress),
         threshold(tracking ? tracking->threshold : 0.0),
         contact_cell(tracking ? tracking->contact_cell : nullptr),
-        sampled_max(tracking ? tracking->sampled_max : nullptr),
         cell_von_mises(tracking ? tracking->cell_von_mises : nullptr) {}
 
   struct Response {
@@ -87,25 +91,96 @@ struct ForcePass {
   }
   void finish(ForceTotals& t) const {
     t.stress = peaks;
-    if constexpr (kSample) {
-      if (sampled_max) max_into(*sampled_max, sampled);
-    }
+    if constexpr (kSample) max_into(t.sampled, sampled);
   }
 };
 
 template <bool kEnergy, int kStress, bool kSample = false>
 void all_blocks(const Model& model, const double* u, const double* v, double* f, const StressTracking* cc,
-                ForceTotals& t) {
-  for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
-    element_kernel<decltype(viscous)::value>(b, mat, u, v, f, ForcePass<kEnergy, kStress, kSample>(cc, t), t);
-  });
+                ForceTotals& t, ForceScratch* scratch) {
+  if (!scratch) {
+    for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
+      element_kernel<decltype(viscous)::value>(b, mat, u, v, DirectScatter{f}, ForcePass<kEnergy, kStress, kSample>(cc, t),
+                                               t);
+    });
+    return;
+  }
+  ForceScratch& x = *scratch;
+  const long chunks = static_cast<long>(x.chunks.size());
+  const int nodes = model.num_nodes();
+  const ForceTotals start = t;  // every chunk starts from the pass's initial totals
+  auto chunk = [&](long c) {
+    const ForceScratch::Chunk& k = x.chunks[c];
+    ForceTotals& tc = x.totals[c];
+    tc = start;
+    auto run = [&](const auto& b, auto viscous) {
+      std::visit(
+          [&](const auto& mat) {
+            element_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
+                                                     ForcePass<kEnergy, kStress, kSample>(cc, tc), tc, k.begin, k.end);
+          },
+          b.material);
+    };
+    if (k.kind == 0) {
+      const Q4HourglassBlock& b = model.q4_hourglass[k.block];
+      if (b.form == HourglassForm::viscous)
+        run(b, std::true_type{});
+      else
+        run(b, std::false_type{});
+    } else if (k.kind == 1) {
+      run(model.q4_full[k.block], std::false_type{});
+    } else {
+      run(model.t3[k.block], std::false_type{});
+    }
+  };
+  // Each node sums its cells' forces in the serial scatter's order, from 0 as f_int starts.
+  auto gather = [&](int i) {
+    double fx = 0.0, fy = 0.0;
+    for (int p = x.node_offsets[i]; p < x.node_offsets[i + 1]; ++p) {
+      fx += x.element_forces[x.entries[p]];
+      fy += x.element_forces[x.entries[p] + 1];
+    }
+    f[2 * i] = fx;
+    f[2 * i + 1] = fy;
+  };
+  // The same arithmetic either way. No parallel region at all for a small model or one
+  // thread: even a serialized region costs the OpenMP runtime an allocation.
+  if (x.chunks.size() >= kForceParallelChunks && omp_get_max_threads() > 1) {
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+      for (long c = 0; c < chunks; ++c) chunk(c);
+#pragma omp for schedule(static)
+      for (int i = 0; i < nodes; ++i) gather(i);
+    }
+  } else {
+    for (long c = 0; c < chunks; ++c) chunk(c);
+    for (int i = 0; i < nodes; ++i) gather(i);
+  }
+  // The chunks' totals in chunk order; a peak is taken only if strictly larger, so that of
+  // equal values the first cell wins, as in the serial pass.
+  for (const ForceTotals& c : x.totals) {
+    t.strain_energy += c.strain_energy;
+    t.hourglass_energy += c.hourglass_energy;
+    t.hourglass_power += c.hourglass_power;
+    t.min_jacobian = std::min(t.min_jacobian, c.min_jacobian);
+    if (c.stress.all_cell >= 0 && c.stress.all > t.stress.all) {
+      t.stress.all = c.stress.all;
+      t.stress.all_cell = c.stress.all_cell;
+    }
+    if (c.stress.interior_cell >= 0 && c.stress.interior > t.stress.interior) {
+      t.stress.interior = c.stress.interior;
+      t.stress.interior_cell = c.stress.interior_cell;
+    }
+    max_into(t.sampled, c.sampled);
+  }
 }
 
 }  // namespace
 
 ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
-                            bool with_energy, const StressTracking* stress) {
-  std::fill(f_int, f_int + model.num_dofs(), 0.0);
+                            bool with_energy, const StressTracking* stress, ForceScratch* scratch) {
+  if (!scratch) std::fill(f_int, f_int + model.num_dofs(), 0.0);  // the threaded pass overwrites it
   ForceTotals t;
   if (stress) t.stress.all = t.stress.interior = stress->threshold;  // only cells above it are ranked
   // kStress: 0 = no stresses, else 1 + the measure, so that each measure's kernel is its own.
@@ -113,13 +188,13 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
   // sample without them.
   auto run = [&]<bool kEnergy, bool kSample>() {
     if (!stress) {
-      if constexpr (!kSample) all_blocks<kEnergy, 0>(model, u, v, f_int, stress, t);
+      if constexpr (!kSample) all_blocks<kEnergy, 0>(model, u, v, f_int, stress, t, scratch);
     } else if (stress->measure == StressMeasure::pk2) {
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::pk2), kSample>(model, u, v, f_int, stress, t);
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::pk2), kSample>(model, u, v, f_int, stress, t, scratch);
     } else if (stress->measure == StressMeasure::kirchhoff) {
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::kirchhoff), kSample>(model, u, v, f_int, stress, t);
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::kirchhoff), kSample>(model, u, v, f_int, stress, t, scratch);
     } else {
-      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::cauchy), kSample>(model, u, v, f_int, stress, t);
+      all_blocks<kEnergy, 1 + static_cast<int>(StressMeasure::cauchy), kSample>(model, u, v, f_int, stress, t, scratch);
     }
   };
   if (stress && stress->samples())
@@ -128,7 +203,36 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
     run.template operator()<true, false>();
   else
     run.template operator()<false, false>();
+  if (stress && stress->sampled_max) max_into(*stress->sampled_max, t.sampled);
   return t;
+}
+
+ForceScratch make_force_scratch(const Model& model) {
+  ForceScratch x;
+  std::size_t out = 0;
+  std::vector<std::vector<int>> node_entries(model.num_nodes());
+  auto add = [&](int kind, int block, const auto& b) {
+    constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
+    for (std::size_t e0 = 0; e0 < b.conn.size(); e0 += kForceChunkCells)
+      x.chunks.push_back({kind, block, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
+    for (std::size_t e = 0; e < b.conn.size(); ++e)
+      for (int i = 0; i < N; ++i) node_entries[b.conn[e][i]].push_back(static_cast<int>(out + 2 * N * e + 2 * i));
+    out += 2 * N * b.conn.size();
+  };
+  // for_each_block's order.
+  for (std::size_t k = 0; k < model.q4_hourglass.size(); ++k) add(0, static_cast<int>(k), model.q4_hourglass[k]);
+  for (std::size_t k = 0; k < model.q4_full.size(); ++k) add(1, static_cast<int>(k), model.q4_full[k]);
+  for (std::size_t k = 0; k < model.t3.size(); ++k) add(2, static_cast<int>(k), model.t3[k]);
+  if (out > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw std::length_error("make_force_scratch: too many element-force entries for int indices");
+  x.node_offsets.assign(1, 0);
+  for (const auto& l : node_entries) {
+    x.entries.insert(x.entries.end(), l.begin(), l.end());
+    x.node_offsets.push_back(static_cast<int>(x.entries.size()));
+  }
+  x.element_forces.assign(out, 0.0);
+  x.totals.resize(x.chunks.size());
+  return x;
 }
 
 namespace {

@@ -2,7 +2,9 @@
 // -> fe = vol dN/dX P^T -> scatter. Flat DOF arrays: u, v, f are 2n, interleaved (x0, y0, x1..).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "solver/model/model.hpp"
 #include "solver/materials/stress.hpp"
@@ -30,7 +32,35 @@ struct ForceTotals {
   double min_jacobian = 1e300;    // smallest det F at any integration point [-]
   StressPeaks stress;             // only when asked for (StressTracking): the largest values above its
                                   // threshold (a cell index of -1: none above it)
+  VonMises2 sampled{0.0, 0.0, 0.0};  // what StressTracking::sampled_max asked for, of this pass alone [Pa^2]
 };
+
+// The workspace of the threaded force pass, made once per model (make_force_scratch). The
+// cells are cut into chunks of a fixed number of cells (whatever the number of threads); the
+// chunks run in parallel and store each cell's nodal forces at the cell's place in
+// element_forces (2N values per cell, the cells in the order of element_kernels.hpp's
+// for_each_block); then every node sums its entries in that order, the order in which a
+// serial scatter adds them, and the chunks' totals are combined in chunk order. So the forces
+// equal the serial pass's, and no result depends on the number of threads.
+struct ForceScratch {
+  struct Chunk {
+    int kind = 0;             // 0: q4_hourglass, 1: q4_full, 2: t3 (for_each_block's order)
+    int block = 0;            // index in its vector of blocks
+    std::size_t begin = 0, end = 0;  // the block's cells begin <= e < end
+    std::size_t out = 0;      // offset of the block's first cell in element_forces
+  };
+  std::vector<Chunk> chunks;
+  std::vector<int> node_offsets;  // num_nodes + 1: node i's entries are [node_offsets[i], node_offsets[i + 1])
+  std::vector<int> entries;       // positions in element_forces of a node's x force (y: + 1), ascending
+  std::vector<double> element_forces;
+  std::vector<ForceTotals> totals;  // per chunk
+};
+inline constexpr std::size_t kForceChunkCells = 256;
+// Below this many chunks the pass runs on one thread (the same arithmetic): a parallel region
+// costs more than it saves on a small model.
+inline constexpr std::size_t kForceParallelChunks = 4;
+
+ForceScratch make_force_scratch(const Model& model);
 
 // Overwrites f_int. `v` (2n) is the velocity the viscous hourglass forces use.
 // With `with_energy` the strain and stored hourglass energies are summed as well. With
@@ -38,8 +68,13 @@ struct ForceTotals {
 // integration point above stress->threshold (ForceTotals::stress; the cost:
 // bench/bench_element_forces.cpp), and fills what stress->sampled_max and
 // stress->cell_von_mises ask for (the values von_mises_maxima() and cell_von_mises() give).
+// With `scratch` (from make_force_scratch(model)) the pass is the threaded one: it uses the
+// OpenMP threads in force (RunSettings::threads, ThreadScope) and gives the same results for
+// any number of them. The energies then sum per chunk, so they may differ from the serial
+// pass's in the last bits.
 ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
-                            bool with_energy, const StressTracking* stress = nullptr);
+                            bool with_energy, const StressTracking* stress = nullptr,
+                            ForceScratch* scratch = nullptr);
 
 // Largest von Mises stress of `measure` over each cell's integration points, per global cell
 // [Pa]. `out` has model.num_cells() entries.

@@ -115,7 +115,7 @@ void all_blocks(const Model& model, const double* u, const double* v, double k_s
     std::size_t& off = std::is_same_v<Block, T3Block>       ? off_t3
                        : std::is_same_v<Block, Q4FullBlock> ? off_full
                                                             : off_hg;
-    element_kernel<decltype(viscous)::value>(b, mat, u, v, f,
+    element_kernel<decltype(viscous)::value>(b, mat, u, v, DirectScatter{f},
                                              SystemPass<kEnergy, N>{k_scale, c_scale, val, slots + off, {}}, t);
     off += 4 * N * N * b.conn.size();
   });

@@ -12,6 +12,7 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
   s.a = Eigen::VectorXd::Zero(n);
   s.f_int = Eigen::VectorXd::Zero(n);
   s.f_ext.resize(n);
+  s.force_scratch = make_force_scratch(model);
   for (int i = 0; i < model.num_nodes(); ++i)
     s.f_ext.segment<2>(2 * i) = model.mass(2 * i) * model.gravity;
   for (const auto& p : prescribed) {
@@ -27,7 +28,8 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
               bool with_energy, const StressTracking* stress) {
-  s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy, stress);
+  s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy, stress,
+                             &s.force_scratch);
   s.a = model.inv_mass.cwiseProduct(s.f_ext - s.f_int);
   s.hourglass_dissipation += s.dt * s.forces.hourglass_power;
   if (s.step == 0) s.v_half -= 0.5 * s.dt * s.a;

@@ -38,6 +38,7 @@ struct State {
   double reaction_work = 0.0;          // work of the prescribed-DOF reactions up to t_n [J]
   double reaction_power = 0.0;         // sum R v_n of the last evaluate() [W]
   ForceTotals forces;                  // totals of the last evaluate()
+  ForceScratch force_scratch;          // the threaded force pass's workspace (internal_forces.hpp)
 };
 
 // Allocates the state: u_0 = initial_displacement (or 0) with prescribed displacements
@@ -49,7 +50,8 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 // and the work of their reactions, accumulated by the trapezoidal rule in time (the rule under
 // which 1/2 v_n^T M v_n changes by the work of the forces, to O(dt^2)). At n = 0 also sets
 // v_{-1/2} = v_0 - dt/2 a_0.
-// With `stress` (internal_forces()) the pass also ranks the step's stresses.
+// With `stress` (internal_forces()) the pass also ranks the step's stresses. The force pass is
+// the threaded one (s.force_scratch), on the OpenMP threads in force.
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
               bool with_energy, const StressTracking* stress = nullptr);
 
