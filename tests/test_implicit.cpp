@@ -194,23 +194,29 @@ TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
   //   - the three-point estimate log(r_k+2 / r_k+1) / log(r_k+1 / r_k) >= 1.8 where defined
   //     (measured 1.90 SVK, 1.97 neo-Hookean).
   // The step must be a pure Newton iteration: no shift of an indefinite matrix (which would
-  // make the convergence linear while shifted).
+  // make the convergence linear while shifted), and on the direct path a new factor every
+  // iteration (refactor_contraction = 0: full Newton; the default modified Newton reuses the
+  // factor and converges linearly by design, NewtonWithAReusedFactorConverges below).
   const std::vector<std::pair<const char*, Material>> materials = {
       {"neo-Hookean", NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::strain)},
       {"SVK", StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain)}};
   for (const auto& [name, material] : materials) {
     const Model model = spinning_block(material);
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
-      const char* solver_name = solver == LinearSolverKind::pcg ? "pcg" : "ldlt";
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
+      const char* solver_name = solver == LinearSolverKind::pcg ? "pcg" : "direct";
       SCOPED_TRACE(std::string(name) + " " + solver_name);
       RunSettings s;
       s.dt = 5.0 * model.critical_dt;
       s.end_time = s.dt;
       ImplicitSettings im;
       im.linear_solver = solver;
+      im.refactor_contraction = 0.0;
       ImplicitIntegrator integrator(model, s, im);
       ASSERT_TRUE(integrator.step(true)) << integrator.failure();
       EXPECT_EQ(integrator.shifted_iterations(), 0);
+      if (solver == LinearSolverKind::direct) {
+        EXPECT_EQ(integrator.factorizations(), integrator.newton_iterations_total());
+      }
       const double min_j = integrator.state().forces.min_jacobian;
       const std::vector<double>& r = integrator.residuals();
       std::printf("[implicit] Newton %s %s (min det F %.3f):", name, solver_name, min_j);
@@ -267,7 +273,7 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
   for (int d = 0; d < model.num_dofs(); ++d) scale += model.mass[d] * std::abs(model.initial_velocity[d]);
   const Vec2 p0 = initial_momentum(model);
   for (double factor : {0.5, 5.0})
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
       RunSettings s;
       s.dt = factor * model.critical_dt;
       s.end_time = 400 * s.dt;
@@ -282,7 +288,7 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
       double worst = 0.0;
       for (std::size_t row = 0; row < h.rows(); ++row)
         worst = std::max(worst, (Vec2(h.at(row, px), h.at(row, py)) - p0).norm() / scale);
-      const char* name = solver == LinearSolverKind::pcg ? "pcg" : "ldlt";
+      const char* name = solver == LinearSolverKind::pcg ? "pcg" : "direct";
       std::printf("[implicit] momentum drift dt = %.1f x crit, %s: max |p - p0| / sum m|v| = %.1e\n",
                   factor, name, worst);
       EXPECT_LT(worst, 1e-13) << name << " dt = " << factor << " x crit";
@@ -300,17 +306,20 @@ TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
   // agreement. Measured max |v_pcg - v_ldlt| / max |v|: 1.5e-12 (0.5 x), 1.0e-11 (2 x); u:
   // <= 1.3e-12. Bound 1e-10, the Newton tolerance (~10 x the larger measurement). It has
   // teeth: loosening only the CG tolerance to 1e-8 gives 1.9e-10 at 0.5 x (measured), so a
-  // linear solver 1e4 x less accurate than configured fails it.
+  // linear solver 1e4 x less accurate than configured fails it. Both run full Newton (the direct
+  // solver with refactor_contraction = 0), so that only the linear solver differs; modified
+  // Newton against full Newton is NewtonWithAReusedFactorMatchesFullNewton.
   const Model model = vibrating_slab(1.0, 0.2);
   for (double factor : {0.5, 2.0}) {
     std::vector<RunResult> runs;
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
       RunSettings s;
       s.dt = factor * model.critical_dt;
       s.end_time = 100 * s.dt;
       s.field_times = {50 * s.dt, s.end_time};
       ImplicitSettings im;
       im.linear_solver = solver;
+      im.refactor_contraction = 0.0;
       runs.push_back(run_implicit(model, s, im));
       ASSERT_EQ(runs.back().status, RunStatus::ok) << runs.back().reason;
       ASSERT_EQ(runs.back().fields.size(), 2u);
@@ -328,6 +337,66 @@ TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
       EXPECT_LT(du, 1e-10) << "dt = " << factor << " x crit, step " << a.step;
       EXPECT_LT(dv, 1e-10) << "dt = " << factor << " x crit, step " << a.step;
     }
+  }
+}
+
+TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
+  // The direct solver's modified Newton (the default) against full Newton (refactor_contraction
+  // = 0) on 100 steps of the distorted slab at 0.5 x and 5 x critical. Both stop at the same
+  // Newton tolerance |G|_inf <= 1e-10 x the momentum scale, but at different points inside it:
+  // full Newton overshoots the tolerance by orders of magnitude (quadratic convergence), the
+  // linearly converging modified Newton stops just below it. Measured max dv / max|v| over the
+  // two snapshots: 1.4e-9 (0.5 x), 5.6e-10 (5 x); du / max|u| <= 9.2e-11. Bounds 4e-9 (v) and
+  // 4e-10 (u), about 3 x and 4 x the largest measurement. With teeth: the same modified
+  // Newton at tolerance 1e-8 differs by 3.6e-8 (0.5 x) and 1.2e-8 (5 x) in v (measured), and
+  // must exceed the bound here.
+  // Modified Newton must actually reuse the factor (fewer than half as many factorizations as
+  // iterations), and refactor_iterations = 1 must refactorize every iteration.
+  const Model model = vibrating_slab(1.0, 0.2);
+  for (double factor : {0.5, 5.0}) {
+    std::vector<RunResult> runs;
+    for (double contraction : {0.0, ImplicitSettings{}.refactor_contraction, -1.0, -2.0}) {
+      RunSettings s;
+      s.dt = factor * model.critical_dt;
+      s.end_time = 100 * s.dt;
+      s.field_times = {50 * s.dt, s.end_time};
+      ImplicitSettings im;
+      im.linear_solver = LinearSolverKind::direct;
+      if (contraction >= 0.0) {
+        im.refactor_contraction = contraction;
+      } else if (contraction == -1.0) {
+        im.refactor_iterations = 1;
+      } else {
+        im.newton_tolerance = 1e-8;
+      }
+      runs.push_back(run_implicit(model, s, im));
+      ASSERT_EQ(runs.back().status, RunStatus::ok) << runs.back().reason;
+      ASSERT_EQ(runs.back().fields.size(), 2u);
+    }
+    const RunResult &full = runs[0], &modified = runs[1], &every = runs[2];
+    std::printf("[implicit] dt = %.1f x crit: full Newton %ld iterations, %ld factorizations; modified "
+                "%ld iterations, %ld factorizations\n",
+                factor, full.newton_iterations, full.factorizations, modified.newton_iterations,
+                modified.factorizations);
+    EXPECT_EQ(full.factorizations, full.newton_iterations);
+    EXPECT_EQ(every.factorizations, every.newton_iterations);
+    EXPECT_LT(modified.factorizations, modified.newton_iterations / 2);
+    double dv_loose_max = 0.0;
+    for (std::size_t f = 0; f < 2; ++f) {
+      const FieldSnapshot& a = full.fields[f];
+      const FieldSnapshot& b = modified.fields[f];
+      const FieldSnapshot& loose = runs[3].fields[f];
+      const double du = (a.u - b.u).lpNorm<Eigen::Infinity>() / a.u.lpNorm<Eigen::Infinity>();
+      const double dv = (a.v - b.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      const double dv_loose = (a.v - loose.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      std::printf("[implicit] full vs modified Newton, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
+                  "max dv / max|v| %.2e (modified at tolerance 1e-8: %.2e)\n",
+                  factor, a.step, du, dv, dv_loose);
+      EXPECT_LT(du, 4e-10) << "dt = " << factor << " x crit, step " << a.step;
+      EXPECT_LT(dv, 4e-9) << "dt = " << factor << " x crit, step " << a.step;
+      dv_loose_max = std::max(dv_loose_max, dv_loose);
+    }
+    EXPECT_GT(dv_loose_max, 4e-9) << "dt = " << factor << " x crit: the bound does not see a 100 x looser tolerance";
   }
 }
 
