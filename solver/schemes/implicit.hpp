@@ -43,9 +43,10 @@ struct ImplicitSettings {
   // Refactorization rule of the direct solver's modified Newton (docs/implicit.md). The factor
   // of A is kept across Newton iterations and steps; the next iteration refactorizes when the
   // last one, not yet converged, contracted the residual by less than this factor
-  // (r_k+1 > refactor_contraction r_k) or needed a line search, or when it was the
-  // refactor_iterations-th of this step on the same factor. refactor_contraction = 0 or
-  // refactor_iterations = 1 refactorizes every iteration (full Newton).
+  // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
+  // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
+  // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
+  // first of each step.
   double refactor_contraction = 0.5;  // [0, 1)
   int refactor_iterations = 6;        // >= 1
 };
