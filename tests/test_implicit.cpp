@@ -182,7 +182,7 @@ Model spinning_block(const Material& material) {
 
 TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
   // One step, default tolerances, each material with each linear solver. Measured relative
-  // residual sequences (identical to 3 digits for PCG and LDL^T):
+  // residual sequences (identical to 3 digits for PCG and the direct solver in full Newton):
   //   neo-Hookean: 0.5, 0.27, 1.9e-2, 5.6e-5, 6.2e-10, ~1e-15
   //   SVK:         0.5, 0.42, 0.21, 1.3e-2, 7.9e-5, 4.5e-9, ~1e-15
   // Pairs (r_k, r_k+1) are used where r_k <= 0.05 (past the initial global phase) and
@@ -262,8 +262,9 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
   // sum m v is conserved by the converged step; and the unconverged part is too: the Newton
   // update satisfies 1^T A dv = 1^T M dv = -1^T G up to the linear solve's residual, since
   // rigid translations are in the null space of K_T. So the momentum changes only by
-  // round-off (LDL^T) or the CG residual's sum (PCG). Measured max |p - p0| / sum m|v| over
-  // 400 steps: 4.7e-16 .. 9.0e-16 for both solvers at 0.5 and 5 x critical. Bound 1e-13:
+  // round-off (direct solver) or the CG residual's sum (PCG). Measured max |p - p0| / sum m|v|
+  // over 400 steps: 5.4e-16 .. 9.1e-16 for both solvers at 0.5 and 5 x critical (the direct
+  // solver with its default modified Newton). Bound 1e-13:
   // round-off accumulated over 400 steps, while a single unbalanced force term (or a
   // reaction-like residual left in G) would change the momentum at O(1e-10) or more.
   Model model = vibrating_slab(1.0, 0.2);
@@ -298,13 +299,13 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
 }
 
 TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
-  // PCG (tolerance 1e-12 relative) and LDL^T on the same 100 steps of the distorted slab, at
-  // 0.5 x critical (where "auto" picks PCG) and 2 x (CG ~20 iterations per solve). Each step
+  // PCG (tolerance 1e-12 relative) and the direct solver on the same 100 steps of the distorted
+  // slab, at 0.5 x critical and 2 x (CG ~20 iterations per solve). Each step
   // is solved to |G|_inf <= 1e-10 |M v| (Newton tolerance); with A ~ M that is a velocity
   // difference of up to ~1e-10 |v| per step between two correct solvers, and Newton corrects
   // inexact linear solves, so it is this tolerance, not the CG tolerance, that sets the
-  // agreement. Measured max |v_pcg - v_ldlt| / max |v|: 1.5e-12 (0.5 x), 1.0e-11 (2 x); u:
-  // <= 1.3e-12. Bound 1e-10, the Newton tolerance (~10 x the larger measurement). It has
+  // agreement. Measured max |v_pcg - v_direct| / max |v|: 2.0e-12 (0.5 x), 1.2e-11 (2 x); u:
+  // <= 1.3e-12 (with the hand-written LDL^T before CHOLMOD: 1.5e-12, 1.0e-11). Bound 1e-10, the Newton tolerance (~10 x the larger measurement). It has
   // teeth: loosening only the CG tolerance to 1e-8 gives 1.9e-10 at 0.5 x (measured), so a
   // linear solver 1e4 x less accurate than configured fails it. Both run full Newton (the direct
   // solver with refactor_contraction = 0), so that only the linear solver differs; modified
@@ -325,13 +326,13 @@ TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
       ASSERT_EQ(runs.back().fields.size(), 2u);
     }
     EXPECT_GT(runs[0].linear_iterations, 0);   // PCG did iterate
-    EXPECT_EQ(runs[1].linear_iterations, 0);   // LDL^T counts no CG iterations
+    EXPECT_EQ(runs[1].linear_iterations, 0);   // the direct solver counts no CG iterations
     for (std::size_t f = 0; f < 2; ++f) {
       const FieldSnapshot& a = runs[0].fields[f];
       const FieldSnapshot& b = runs[1].fields[f];
       const double du = (a.u - b.u).lpNorm<Eigen::Infinity>() / a.u.lpNorm<Eigen::Infinity>();
       const double dv = (a.v - b.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
-      std::printf("[implicit] pcg vs ldlt, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
+      std::printf("[implicit] pcg vs direct, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
                   "max dv / max|v| %.2e\n",
                   factor, a.step, du, dv);
       EXPECT_LT(du, 1e-10) << "dt = " << factor << " x crit, step " << a.step;
@@ -407,14 +408,15 @@ TEST(Implicit, FreeFallUnderGravity) {
   // theta g dt) sums to
   //   u_n = v0 t + g t^2 / 2 + (theta - 1/2) g dt t,
   // exact constant-acceleration motion at theta = 1/2, first order in dt above it. Checked at
-  // 0.5 x critical (PCG, extrapolating predictor) and 3 x (LDL^T, predictor v1 = v0), 300 steps.
+  // 0.5 x critical (extrapolating predictor) and 3 x (predictor v1 = v0), 300 steps, with the
+  // default direct solver (modified Newton).
   // - Centre of mass: the element forces cancel in the sum, so it follows the formula to
   //   round-off of the running sums: 1e-12 relative (measured <= 3e-15).
   // - Every node: the step is solved only to |G| <= 1e-10 |M v| (Newton tolerance), and at
   //   0.5 x critical the extrapolated predictor is often accepted without an iteration, so each
   //   step may leave a ~1e-10 relative velocity error, up to 300 x that over the run. Measured
-  //   max |v - (v0 + g t)| / |v0| 1.2e-9 and |u - u_theta| / |u| 7e-12 (0.5 x), 5e-12 and 1e-14
-  //   (3 x). Bound 1e-8 (a third of the 300-step accumulation, ~8 x measured). At theta = 1 the
+  //   max |v - (v0 + g t)| / |v0| 1.4e-9 and |u - u_theta| / |u| 7.6e-12 (0.5 x), 5.1e-12 and
+  //   1.2e-14 (3 x). Bound 1e-8 (a third of the 300-step accumulation, ~8 x measured). At theta = 1 the
   //   theta = 1/2 parabola is missed by 3e-5 .. 1.9e-4, so the bound separates the two orders.
   // - External work = M g . u_c exactly (1e-12 relative, measured <= 3e-15), and at theta = 1/2
   //   the energy error is the round-off floor of a rigid state's strain energy, 10 eps E V / E0
@@ -499,7 +501,7 @@ struct PulledBar {
 
 TEST(Implicit, PrescribedVelocityWorkIsAccounted) {
   // 1D bar theory as in test_explicit: W(t) = rho c V^2 A (3t - 4L/c) for 2L/c < t < 4L/c.
-  // Measured W / W_theory - 1: -0.4 % (1 x critical, PCG) and +0.3 % (4 x, LDL^T); accepted
+  // Measured W / W_theory - 1: -0.4 % (1 x critical) and +0.3 % (4 x), direct solver; accepted
   // 1 % (the discrete front's Gibbs oscillation). The pulled end moves exactly at V.
   // Energy balance |E - E0 - W_ext| / W_ext: the header's identity makes it exact for a linear
   // material at theta = 1/2 with the reaction work R . du that the scheme records, so what
