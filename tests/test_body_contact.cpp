@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "harness/input/case_setup.hpp"
@@ -380,21 +381,32 @@ TEST(BodyContact, PairStepsDoNotAllocate) {
   }
 }
 
-// The implicit step allocates nothing either, with both linear solvers (the LDL^T path also
-// builds the exact condensed compliance W by column solves every step), between bodies and
-// against a rigid plane, with and without friction.
+// The implicit step allocates nothing either, with both linear solvers (the direct path
+// refactorizes through CHOLMOD and builds the exact condensed compliance W by column solves),
+// between bodies and against a rigid plane, with and without friction.
 TEST(BodyContact, ImplicitStepsDoNotAllocate) {
-  for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+  // The direct solver both with its default modified Newton (factor and contact columns reused)
+  // and with full Newton (refactor_contraction = 0: a CHOLMOD factorization in every iteration
+  // of the counted steps).
+  struct Config {
+    LinearSolverKind solver;
+    double refactor_contraction;
+    const char* name;
+  };
+  for (const Config& config : {Config{LinearSolverKind::pcg, 0.5, "pcg"}, Config{LinearSolverKind::direct, 0.5, "direct"},
+                               Config{LinearSolverKind::direct, 0.0, "direct, full Newton"}}) {
     for (double mu : {0.0, 0.2}) {
-      SCOPED_TRACE(std::string(solver == LinearSolverKind::pcg ? "pcg" : "ldlt") + " mu " + std::to_string(mu));
+      SCOPED_TRACE(std::string(config.name) + " mu " + std::to_string(mu));
       HeadOn h(mu, {1.0, -0.3});
       h.settings.dt = 1e-7;
       h.settings.obstacles = {make_line_obstacle("floor", Vec2::Zero(), Vec2::UnitY())};
       h.settings.friction = {{mu}, {mu}};
       ImplicitSettings im;
-      im.linear_solver = solver;
+      im.linear_solver = config.solver;
+      im.refactor_contraction = config.refactor_contraction;
       ImplicitIntegrator integrator(h.model, h.settings, im);
       for (int n = 0; n < 5; ++n) ASSERT_TRUE(integrator.step(false)) << integrator.failure();  // warm up
+      const long factorizations = integrator.factorizations();
       const long before = g_allocations.load();
       int active = 0;
       for (int n = 0; n < 200; ++n) {
@@ -403,9 +415,14 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
       }
       EXPECT_EQ(g_allocations.load() - before, 0);
       EXPECT_GT(active, 2);  // the bars' interface and the striker on the floor
-      EXPECT_EQ(integrator.direct_solver(), solver == LinearSolverKind::ldlt);
-      if (solver == LinearSolverKind::ldlt) {
+      EXPECT_EQ(integrator.direct_solver(), config.solver == LinearSolverKind::direct);
+      if (config.solver == LinearSolverKind::direct) {
         EXPECT_GT(integrator.exact_contact_solves(), 0);
+        std::printf("[body contact] implicit %s mu %.1f: %ld factorizations in the counted steps\n",
+                    config.name, mu, integrator.factorizations() - factorizations);
+        if (config.refactor_contraction == 0.0) {
+          EXPECT_GE(integrator.factorizations() - factorizations, 200);
+        }
       }
     }
   }
@@ -417,8 +434,8 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
 // end faces meet node on node) and a cap of 2 sweeps: the run ends, the steps are counted, and
 // the momentum, which no reaction of a body pair can change, is still conserved.
 TEST(BodyContact, ImplicitUnconvergedContactIsCountedNotFatal) {
-  for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
-    SCOPED_TRACE(solver == LinearSolverKind::pcg ? "pcg" : "ldlt");
+  for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
+    SCOPED_TRACE(solver == LinearSolverKind::pcg ? "pcg" : "direct");
     HeadOn h(0.2, {1.0, -0.3});
     h.settings.body_pairs.push_back({1, 0, 0.2});
     h.settings.dt = 1e-7;

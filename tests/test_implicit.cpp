@@ -182,7 +182,7 @@ Model spinning_block(const Material& material) {
 
 TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
   // One step, default tolerances, each material with each linear solver. Measured relative
-  // residual sequences (identical to 3 digits for PCG and LDL^T):
+  // residual sequences (identical to 3 digits for PCG and the direct solver in full Newton):
   //   neo-Hookean: 0.5, 0.27, 1.9e-2, 5.6e-5, 6.2e-10, ~1e-15
   //   SVK:         0.5, 0.42, 0.21, 1.3e-2, 7.9e-5, 4.5e-9, ~1e-15
   // Pairs (r_k, r_k+1) are used where r_k <= 0.05 (past the initial global phase) and
@@ -194,23 +194,29 @@ TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
   //   - the three-point estimate log(r_k+2 / r_k+1) / log(r_k+1 / r_k) >= 1.8 where defined
   //     (measured 1.90 SVK, 1.97 neo-Hookean).
   // The step must be a pure Newton iteration: no shift of an indefinite matrix (which would
-  // make the convergence linear while shifted).
+  // make the convergence linear while shifted), and on the direct path a new factor every
+  // iteration (refactor_contraction = 0: full Newton; the default modified Newton reuses the
+  // factor and converges linearly by design, NewtonWithAReusedFactorConverges below).
   const std::vector<std::pair<const char*, Material>> materials = {
       {"neo-Hookean", NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::strain)},
       {"SVK", StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain)}};
   for (const auto& [name, material] : materials) {
     const Model model = spinning_block(material);
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
-      const char* solver_name = solver == LinearSolverKind::pcg ? "pcg" : "ldlt";
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
+      const char* solver_name = solver == LinearSolverKind::pcg ? "pcg" : "direct";
       SCOPED_TRACE(std::string(name) + " " + solver_name);
       RunSettings s;
       s.dt = 5.0 * model.critical_dt;
       s.end_time = s.dt;
       ImplicitSettings im;
       im.linear_solver = solver;
+      im.refactor_contraction = 0.0;
       ImplicitIntegrator integrator(model, s, im);
       ASSERT_TRUE(integrator.step(true)) << integrator.failure();
       EXPECT_EQ(integrator.shifted_iterations(), 0);
+      if (solver == LinearSolverKind::direct) {
+        EXPECT_EQ(integrator.factorizations(), integrator.newton_iterations_total());
+      }
       const double min_j = integrator.state().forces.min_jacobian;
       const std::vector<double>& r = integrator.residuals();
       std::printf("[implicit] Newton %s %s (min det F %.3f):", name, solver_name, min_j);
@@ -256,8 +262,9 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
   // sum m v is conserved by the converged step; and the unconverged part is too: the Newton
   // update satisfies 1^T A dv = 1^T M dv = -1^T G up to the linear solve's residual, since
   // rigid translations are in the null space of K_T. So the momentum changes only by
-  // round-off (LDL^T) or the CG residual's sum (PCG). Measured max |p - p0| / sum m|v| over
-  // 400 steps: 4.7e-16 .. 9.0e-16 for both solvers at 0.5 and 5 x critical. Bound 1e-13:
+  // round-off (direct solver) or the CG residual's sum (PCG). Measured max |p - p0| / sum m|v|
+  // over 400 steps: 5.4e-16 .. 9.1e-16 for both solvers at 0.5 and 5 x critical (the direct
+  // solver with its default modified Newton). Bound 1e-13:
   // round-off accumulated over 400 steps, while a single unbalanced force term (or a
   // reaction-like residual left in G) would change the momentum at O(1e-10) or more.
   Model model = vibrating_slab(1.0, 0.2);
@@ -267,7 +274,7 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
   for (int d = 0; d < model.num_dofs(); ++d) scale += model.mass[d] * std::abs(model.initial_velocity[d]);
   const Vec2 p0 = initial_momentum(model);
   for (double factor : {0.5, 5.0})
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
       RunSettings s;
       s.dt = factor * model.critical_dt;
       s.end_time = 400 * s.dt;
@@ -282,7 +289,7 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
       double worst = 0.0;
       for (std::size_t row = 0; row < h.rows(); ++row)
         worst = std::max(worst, (Vec2(h.at(row, px), h.at(row, py)) - p0).norm() / scale);
-      const char* name = solver == LinearSolverKind::pcg ? "pcg" : "ldlt";
+      const char* name = solver == LinearSolverKind::pcg ? "pcg" : "direct";
       std::printf("[implicit] momentum drift dt = %.1f x crit, %s: max |p - p0| / sum m|v| = %.1e\n",
                   factor, name, worst);
       EXPECT_LT(worst, 1e-13) << name << " dt = " << factor << " x crit";
@@ -292,42 +299,106 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
 }
 
 TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
-  // PCG (tolerance 1e-12 relative) and LDL^T on the same 100 steps of the distorted slab, at
-  // 0.5 x critical (where "auto" picks PCG) and 2 x (CG ~20 iterations per solve). Each step
+  // PCG (tolerance 1e-12 relative) and the direct solver on the same 100 steps of the distorted
+  // slab, at 0.5 x critical and 2 x (CG ~20 iterations per solve). Each step
   // is solved to |G|_inf <= 1e-10 |M v| (Newton tolerance); with A ~ M that is a velocity
   // difference of up to ~1e-10 |v| per step between two correct solvers, and Newton corrects
   // inexact linear solves, so it is this tolerance, not the CG tolerance, that sets the
-  // agreement. Measured max |v_pcg - v_ldlt| / max |v|: 1.5e-12 (0.5 x), 1.0e-11 (2 x); u:
-  // <= 1.3e-12. Bound 1e-10, the Newton tolerance (~10 x the larger measurement). It has
+  // agreement. Measured max |v_pcg - v_direct| / max |v|: 2.0e-12 (0.5 x), 1.2e-11 (2 x); u:
+  // <= 1.3e-12 (with the hand-written LDL^T before CHOLMOD: 1.5e-12, 1.0e-11). Bound 1e-10, the Newton tolerance (~10 x the larger measurement). It has
   // teeth: loosening only the CG tolerance to 1e-8 gives 1.9e-10 at 0.5 x (measured), so a
-  // linear solver 1e4 x less accurate than configured fails it.
+  // linear solver 1e4 x less accurate than configured fails it. Both run full Newton (the direct
+  // solver with refactor_contraction = 0), so that only the linear solver differs; modified
+  // Newton against full Newton is NewtonWithAReusedFactorMatchesFullNewton.
   const Model model = vibrating_slab(1.0, 0.2);
   for (double factor : {0.5, 2.0}) {
     std::vector<RunResult> runs;
-    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::ldlt}) {
+    for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
       RunSettings s;
       s.dt = factor * model.critical_dt;
       s.end_time = 100 * s.dt;
       s.field_times = {50 * s.dt, s.end_time};
       ImplicitSettings im;
       im.linear_solver = solver;
+      im.refactor_contraction = 0.0;
       runs.push_back(run_implicit(model, s, im));
       ASSERT_EQ(runs.back().status, RunStatus::ok) << runs.back().reason;
       ASSERT_EQ(runs.back().fields.size(), 2u);
     }
     EXPECT_GT(runs[0].linear_iterations, 0);   // PCG did iterate
-    EXPECT_EQ(runs[1].linear_iterations, 0);   // LDL^T counts no CG iterations
+    EXPECT_EQ(runs[1].linear_iterations, 0);   // the direct solver counts no CG iterations
     for (std::size_t f = 0; f < 2; ++f) {
       const FieldSnapshot& a = runs[0].fields[f];
       const FieldSnapshot& b = runs[1].fields[f];
       const double du = (a.u - b.u).lpNorm<Eigen::Infinity>() / a.u.lpNorm<Eigen::Infinity>();
       const double dv = (a.v - b.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
-      std::printf("[implicit] pcg vs ldlt, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
+      std::printf("[implicit] pcg vs direct, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
                   "max dv / max|v| %.2e\n",
                   factor, a.step, du, dv);
       EXPECT_LT(du, 1e-10) << "dt = " << factor << " x crit, step " << a.step;
       EXPECT_LT(dv, 1e-10) << "dt = " << factor << " x crit, step " << a.step;
     }
+  }
+}
+
+TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
+  // The direct solver's modified Newton (the default) against full Newton (refactor_contraction
+  // = 0) on 100 steps of the distorted slab at 0.5 x and 5 x critical. Both stop at the same
+  // Newton tolerance |G|_inf <= 1e-10 x the momentum scale, but at different points inside it:
+  // full Newton overshoots the tolerance by orders of magnitude (quadratic convergence), the
+  // linearly converging modified Newton stops just below it. Measured max dv / max|v| over the
+  // two snapshots: 1.4e-9 (0.5 x), 5.6e-10 (5 x); du / max|u| <= 9.2e-11. Bounds 4e-9 (v) and
+  // 4e-10 (u), about 3 x and 4 x the largest measurement. With teeth: the same modified
+  // Newton at tolerance 1e-8 differs by 3.6e-8 (0.5 x) and 1.2e-8 (5 x) in v (measured), and
+  // must exceed the bound here.
+  // Modified Newton must actually reuse the factor (fewer than half as many factorizations as
+  // iterations), and refactor_iterations = 1 must refactorize in every iteration but the first
+  // of each step (which keeps the factor of the previous step's last iteration).
+  const Model model = vibrating_slab(1.0, 0.2);
+  for (double factor : {0.5, 5.0}) {
+    std::vector<RunResult> runs;
+    for (double contraction : {0.0, ImplicitSettings{}.refactor_contraction, -1.0, -2.0}) {
+      RunSettings s;
+      s.dt = factor * model.critical_dt;
+      s.end_time = 100 * s.dt;
+      s.field_times = {50 * s.dt, s.end_time};
+      ImplicitSettings im;
+      im.linear_solver = LinearSolverKind::direct;
+      if (contraction >= 0.0) {
+        im.refactor_contraction = contraction;
+      } else if (contraction == -1.0) {
+        im.refactor_iterations = 1;
+      } else {
+        im.newton_tolerance = 1e-8;
+      }
+      runs.push_back(run_implicit(model, s, im));
+      ASSERT_EQ(runs.back().status, RunStatus::ok) << runs.back().reason;
+      ASSERT_EQ(runs.back().fields.size(), 2u);
+    }
+    const RunResult &full = runs[0], &modified = runs[1], &every = runs[2];
+    std::printf("[implicit] dt = %.1f x crit: full Newton %ld iterations, %ld factorizations; modified "
+                "%ld iterations, %ld factorizations\n",
+                factor, full.newton_iterations, full.factorizations, modified.newton_iterations,
+                modified.factorizations);
+    EXPECT_EQ(full.factorizations, full.newton_iterations);
+    EXPECT_EQ(every.factorizations, every.newton_iterations - every.steps + 1);
+    EXPECT_LT(modified.factorizations, modified.newton_iterations / 2);
+    double dv_loose_max = 0.0;
+    for (std::size_t f = 0; f < 2; ++f) {
+      const FieldSnapshot& a = full.fields[f];
+      const FieldSnapshot& b = modified.fields[f];
+      const FieldSnapshot& loose = runs[3].fields[f];
+      const double du = (a.u - b.u).lpNorm<Eigen::Infinity>() / a.u.lpNorm<Eigen::Infinity>();
+      const double dv = (a.v - b.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      const double dv_loose = (a.v - loose.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      std::printf("[implicit] full vs modified Newton, dt = %.1f x crit, step %ld: max du / max|u| %.2e, "
+                  "max dv / max|v| %.2e (modified at tolerance 1e-8: %.2e)\n",
+                  factor, a.step, du, dv, dv_loose);
+      EXPECT_LT(du, 4e-10) << "dt = " << factor << " x crit, step " << a.step;
+      EXPECT_LT(dv, 4e-9) << "dt = " << factor << " x crit, step " << a.step;
+      dv_loose_max = std::max(dv_loose_max, dv_loose);
+    }
+    EXPECT_GT(dv_loose_max, 4e-9) << "dt = " << factor << " x crit: the bound does not see a 100 x looser tolerance";
   }
 }
 
@@ -337,14 +408,15 @@ TEST(Implicit, FreeFallUnderGravity) {
   // theta g dt) sums to
   //   u_n = v0 t + g t^2 / 2 + (theta - 1/2) g dt t,
   // exact constant-acceleration motion at theta = 1/2, first order in dt above it. Checked at
-  // 0.5 x critical (PCG, extrapolating predictor) and 3 x (LDL^T, predictor v1 = v0), 300 steps.
+  // 0.5 x critical (extrapolating predictor) and 3 x (predictor v1 = v0), 300 steps, with the
+  // default direct solver (modified Newton).
   // - Centre of mass: the element forces cancel in the sum, so it follows the formula to
   //   round-off of the running sums: 1e-12 relative (measured <= 3e-15).
   // - Every node: the step is solved only to |G| <= 1e-10 |M v| (Newton tolerance), and at
   //   0.5 x critical the extrapolated predictor is often accepted without an iteration, so each
   //   step may leave a ~1e-10 relative velocity error, up to 300 x that over the run. Measured
-  //   max |v - (v0 + g t)| / |v0| 1.2e-9 and |u - u_theta| / |u| 7e-12 (0.5 x), 5e-12 and 1e-14
-  //   (3 x). Bound 1e-8 (a third of the 300-step accumulation, ~8 x measured). At theta = 1 the
+  //   max |v - (v0 + g t)| / |v0| 1.4e-9 and |u - u_theta| / |u| 7.6e-12 (0.5 x), 5.1e-12 and
+  //   1.2e-14 (3 x). Bound 1e-8 (a third of the 300-step accumulation, ~8 x measured). At theta = 1 the
   //   theta = 1/2 parabola is missed by 3e-5 .. 1.9e-4, so the bound separates the two orders.
   // - External work = M g . u_c exactly (1e-12 relative, measured <= 3e-15), and at theta = 1/2
   //   the energy error is the round-off floor of a rigid state's strain energy, 10 eps E V / E0
@@ -429,7 +501,7 @@ struct PulledBar {
 
 TEST(Implicit, PrescribedVelocityWorkIsAccounted) {
   // 1D bar theory as in test_explicit: W(t) = rho c V^2 A (3t - 4L/c) for 2L/c < t < 4L/c.
-  // Measured W / W_theory - 1: -0.4 % (1 x critical, PCG) and +0.3 % (4 x, LDL^T); accepted
+  // Measured W / W_theory - 1: -0.4 % (1 x critical) and +0.3 % (4 x), direct solver; accepted
   // 1 % (the discrete front's Gibbs oscillation). The pulled end moves exactly at V.
   // Energy balance |E - E0 - W_ext| / W_ext: the header's identity makes it exact for a linear
   // material at theta = 1/2 with the reaction work R . du that the scheme records, so what

@@ -304,11 +304,17 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     c.implicit.max_newton_iterations = static_cast<int>(im->integer("max_newton_iterations", 25, 1, 1000));
     c.implicit.linear_tolerance = im->number("linear_tolerance", 1e-12, Range{0.0, 1e-2, true, false});
     c.implicit.max_linear_iterations = static_cast<int>(im->integer("max_linear_iterations", 10000, 1, 10'000'000));
-    const std::string solver = im->choice("linear_solver", "auto", {"auto", "pcg", "ldlt"});
-    c.implicit.linear_solver = solver == "pcg"    ? LinearSolverKind::pcg
-                               : solver == "ldlt" ? LinearSolverKind::ldlt
-                                                  : LinearSolverKind::automatic;
+    // "ldlt" (the hand-written LDL^T this replaced) still selects the direct solver, so older
+    // case files keep their meaning.
+    const std::string solver = im->choice("linear_solver", "auto", {"auto", "pcg", "direct", "ldlt"});
+    c.implicit.linear_solver = solver == "pcg"                          ? LinearSolverKind::pcg
+                               : solver == "direct" || solver == "ldlt" ? LinearSolverKind::direct
+                                                                        : LinearSolverKind::automatic;
     c.implicit.uzawa_sweeps = static_cast<int>(im->integer("uzawa_sweeps", 30, 0, 100000));
+    c.implicit.refactor_contraction =
+        im->number("refactor_contraction", ImplicitSettings{}.refactor_contraction, Range{0.0, 1.0, false, true});
+    c.implicit.refactor_iterations =
+        static_cast<int>(im->integer("refactor_iterations", ImplicitSettings{}.refactor_iterations, 1, 1000));
     im->finish();
   }
   if (const auto pe = root.table("penalty")) {

@@ -139,7 +139,8 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     im["newton_iterations"] = r.newton_iterations;
     im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.newton_iterations) / r.steps : 0.0;
     im["linear_iterations"] = r.linear_iterations;
-    im["linear_solver"] = r.direct_solver ? "ldlt" : "pcg";
+    im["linear_solver"] = r.direct_solver ? "direct" : "pcg";
+    im["factorizations"] = r.factorizations;
     j["implicit"] = im;
   } else {
     j["implicit"] = nullptr;

@@ -8,6 +8,16 @@
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
+namespace {
+
+bool same_stencil(const Stencil& a, const Stencil& b) {
+  if (a.count != b.count) return false;
+  for (int j = 0; j < a.count; ++j)
+    if (a.node[j] != b.node[j] || a.coef[j] != b.coef[j]) return false;
+  return true;
+}
+
+}  // namespace
 
 ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
                                        const ImplicitSettings& settings)
@@ -35,16 +45,19 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
       (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
     }
   residuals_.reserve(set_.max_newton_iterations + 1);
-  // Automatic choice, from measurements on the oblique plate (docs/implicit.md): PCG up to
-  // 3 x the explicit critical step (A mass-dominated: a few CG iterations), LDL^T beyond.
-  if (set_.linear_solver == LinearSolverKind::ldlt ||
-      (set_.linear_solver == LinearSolverKind::automatic && run.dt > 3.0 * model.critical_dt))
-    use_direct();
   const int directions = contact_.any_friction ? 2 : 1;
-  columns_.resize(n, directions * static_cast<int>(contact_.candidates.size()));
-  w_.resize(columns_.cols(), columns_.cols());
+  const int slots = directions * static_cast<int>(contact_.candidates.size());
+  columns_.resize(n, slots);
+  column_factor_.assign(slots, -1);
+  column_direction_.assign(slots, Vec2::Zero());
+  column_stencil_.assign(slots, Stencil{});
+  active_columns_.reserve(slots);
+  w_.resize(slots, slots);
   engaged_.assign(contact_.candidates.size(), 0);
-  r_vec_.resize(columns_.cols());
+  r_vec_.resize(slots);
+  // "auto" is the direct solver: on the oblique plate it was faster than PCG at every step
+  // measured, 0.05 to 15 x the critical step (docs/implicit.md, The linear solver: measured).
+  if (set_.linear_solver != LinearSolverKind::pcg) use_direct();
 }
 
 // Factorizes A. If A is indefinite (the tangent of a far-off iterate under strong compression,
@@ -54,16 +67,20 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
 // definite.
 void ImplicitIntegrator::use_direct() {
   direct_ = true;
-  ldlt_.analyze(system_.matrix);
+  factor_.analyze(system_.matrix);
   a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
+  refactor_next_ = true;
 }
 
 bool ImplicitIntegrator::factorize() {
   const int n = model_.num_dofs();
   double* a = a_values_.data();
   std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
+  ++factor_id_;
+  ++factorizations_;
+  iterations_on_factor_ = 0;
   for (int attempt = 0; attempt < 12; ++attempt) {
-    if (ldlt_.factorize(a)) {
+    if (factor_.factorize(a)) {
       if (attempt > 0) {
         ++shifted_iterations_;
         for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
@@ -74,7 +91,7 @@ bool ImplicitIntegrator::factorize() {
     for (int i = 0; i < n; ++i)
       if (!fixed_[i]) a[system_.diagonal_slots[i]] += add * model_.mass[i];
   }
-  failure_ = "LDL^T factorization: matrix not positive definite even when shifted by 4^11 M";
+  failure_ = "Cholesky factorization: matrix not positive definite even when shifted by 4^11 M";
   return false;
 }
 
@@ -88,7 +105,7 @@ void ImplicitIntegrator::constrain_matrix() {
 
 bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (direct_) {
-    ldlt_.solve(b, x);
+    factor_.solve(b, x);
     return true;
   }
   const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance,
@@ -96,7 +113,7 @@ bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   linear_total_ += r.iterations;
   if (r.converged) return true;
   // CG met an indefinite matrix (a far-off iterate) or stalled: continue the run with the
-  // shifted LDL^T, which handles both.
+  // shifted Cholesky factorization, which handles both.
   if (set_.linear_solver == LinearSolverKind::pcg) {
     failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
     return false;
@@ -104,7 +121,8 @@ bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   ++solver_switches_;
   use_direct();
   if (!factorize()) return false;
-  ldlt_.solve(b, x);
+  refactor_next_ = false;
+  factor_.solve(b, x);
   return true;
 }
 
@@ -262,8 +280,16 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
 // The condensed problem with the exact W = c dt H A^-1 H^T, built from one column solve per
 // active contact direction, then Gauss-Seidel over the contacts with each contact's local
 // problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
-// combination of the same columns. Returns false only when a linear solve fails; whether
-// Gauss-Seidel converged within contact.max_sweeps is contact_converged_.
+// combination of the same columns. On the direct path a column computed with the current factor
+// for the same stencil and direction is reused: with modified Newton the factor, and on a rigid
+// plane the directions, stay the same over many iterations and steps. Returns false only when a
+// linear solve fails; whether Gauss-Seidel converged within contact.max_sweeps is
+// contact_converged_.
+bool ImplicitIntegrator::column_cached(int slot, const Stencil& st, const Vec2& direction) const {
+  return direct_ && column_factor_[slot] == factor_id_ && column_direction_[slot] == direction &&
+         same_stencil(column_stencil_[slot], st);
+}
+
 bool ImplicitIntegrator::exact_contact(double c) {
   ContactSet& cs = contact_;
   const double dt = s_.dt;
@@ -275,19 +301,28 @@ bool ImplicitIntegrator::exact_contact(double c) {
     const Vec2 n = cs.normal[cs.active[a / dirs]];
     return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
   };
+  active_columns_.clear();
   for (int a = 0; a < m; ++a) {
-    rhs_.setZero();
+    const int slot = dirs * cs.active[a / dirs] + a % dirs;
+    active_columns_.push_back(slot);
     const Stencil& st = cs.stencil[cs.active[a / dirs]];
-    for (int j = 0; j < st.count; ++j) rhs_.segment<2>(2 * st.node[j]) += st.coef[j] * direction(a);
+    const Vec2 d = direction(a);
+    if (column_cached(slot, st, d)) continue;
+    rhs_.setZero();
+    for (int j = 0; j < st.count; ++j) rhs_.segment<2>(2 * st.node[j]) += st.coef[j] * d;
     y_.setZero();
     if (!solve(rhs_, y_)) return false;
-    columns_.col(a) = y_;
+    columns_.col(slot) = y_;
+    column_factor_[slot] = direct_ ? factor_id_ : -1;
+    column_direction_[slot] = d;
+    column_stencil_[slot] = st;
   }
   for (int a = 0; a < m; ++a) {
     const Stencil& st = cs.stencil[cs.active[a / dirs]];
     for (int b = 0; b < m; ++b) {
       double h = 0.0;
-      for (int j = 0; j < st.count; ++j) h += st.coef[j] * direction(a).dot(columns_.col(b).segment<2>(2 * st.node[j]));
+      for (int j = 0; j < st.count; ++j)
+        h += st.coef[j] * direction(a).dot(columns_.col(active_columns_[b]).segment<2>(2 * st.node[j]));
       w_(a, b) = c * dt * h;
     }
   }
@@ -337,7 +372,8 @@ bool ImplicitIntegrator::exact_contact(double c) {
     const LocalPair r = cs.reaction[cs.active[a / dirs]];
     r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
   }
-  y_.noalias() = columns_.leftCols(m) * r_vec_.head(m);
+  y_.setZero();
+  for (int a = 0; a < m; ++a) y_.noalias() += r_vec_[a] * columns_.col(active_columns_[a]);
   build_impulse();
   return true;
 }
@@ -365,6 +401,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
   step_unconverged_ = false;
+  iterations_on_factor_ = 0;
   int sweeps = 0;
   double r = residual(false);
   if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
@@ -393,10 +430,19 @@ bool ImplicitIntegrator::step(bool with_energy) {
       return false;
     }
     ++newton_total_;
-    assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_,
-                    f1_.data(), false);
-    constrain_matrix();
-    if (direct_ && !factorize()) return false;
+    // The direct path reuses the factor of an earlier iterate (modified Newton) unless the rule
+    // below asked for a new one; PCG needs the current A every iteration.
+    if (!direct_ || refactor_next_ || set_.refactor_contraction <= 0.0) {
+      assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_,
+                      f1_.data(), false);
+      constrain_matrix();
+      if (direct_) {
+        if (!factorize()) return false;
+        refactor_next_ = false;
+      }
+    }
+    ++iterations_on_factor_;
+    const double r_before = r;
     rhs_ = -(g_ + dt * impulse_);  // the residual without the contact reactions
     dv_free_.setZero();
     if (!solve(rhs_, dv_free_)) return false;
@@ -417,6 +463,15 @@ bool ImplicitIntegrator::step(bool with_energy) {
       if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
       alpha *= 0.5;
     }
+    // Refactorization rule (ImplicitSettings::refactor_contraction): a new factor when this
+    // iteration, not converged, contracted too little, needed a line search, or was the
+    // refactor_iterations-th of the step on this factor. A step that converges keeps the factor
+    // for the next one (counting converged steps too refactorized M2 at 1e-5 100 times instead
+    // of 35, docs/implicit.md).
+    if (direct_ && !(r <= set_.newton_tolerance) &&
+        (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 ||
+         iterations_on_factor_ >= set_.refactor_iterations))
+      refactor_next_ = true;
   }
   if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
 
@@ -486,6 +541,7 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   result.newton_iterations = integrator.newton_iterations_total();
   result.linear_iterations = integrator.linear_iterations_total();
   result.direct_solver = integrator.direct_solver();
+  result.factorizations = integrator.factorizations();
   return result;
 }
 

@@ -3,7 +3,8 @@
 //   M (v1 - v0) = dt [(1 - xi)(F - F_int)_0 + xi (F - F_int)_1] + dt R,
 //   u1 = u0 + dt [(1 - theta) v0 + theta v1],
 // solved by Newton with the consistent tangent A = M + theta xi dt^2 K_T + xi dt C assembled
-// into a preallocated sparse pattern, each linear system by Jacobi-preconditioned CG. Contact
+// into a preallocated sparse pattern, each linear system by Jacobi-preconditioned CG or by a
+// CHOLMOD Cholesky factor reused across Newton iterations and steps (modified Newton). Contact
 // reactions R at t1 come from the same bi-potential update as the semi-explicit scheme, on the
 // condensed problem x = x_free + W R with W = c H A^-1 H^T dt (c = dt theta at the position
 // level, 1 at the velocity level), by Uzawa sweeps in which x is evaluated exactly (one solve
@@ -14,20 +15,21 @@
 #include <vector>
 
 #include "solver/contact/contact_set.hpp"
+#include "solver/linear/cholmod_factor.hpp"
 #include "solver/linear/pcg.hpp"
 #include "solver/schemes/run_types.hpp"
-#include "solver/linear/sparse_ldlt.hpp"
 #include "solver/elements/tangent.hpp"
 
 namespace ricochet {
 
 enum class LinearSolverKind {
   automatic,  // see below
-  pcg,        // Jacobi-preconditioned CG
-  ldlt,       // sparse LDL^T (solver/linear/sparse_ldlt.hpp, AMD ordering; symbolic analysis once)
+  pcg,        // Jacobi-preconditioned CG, full Newton (A assembled every iteration)
+  direct,     // CHOLMOD supernodal Cholesky (solver/linear/cholmod_factor.hpp; symbolic analysis
+              // once per run), modified Newton: the factor is reused while Newton contracts fast
 };
-// automatic: pcg up to dt = 3 critical_dt, ldlt beyond; a pcg solve that fails (indefinite
-// matrix of a far-off iterate) switches the run to ldlt.
+// automatic: direct (faster than pcg at every step measured, docs/implicit.md). With pcg, a
+// solve that fails (indefinite matrix of a far-off iterate) switches the run to direct.
 
 struct ImplicitSettings {
   double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
@@ -38,6 +40,15 @@ struct ImplicitSettings {
   int max_linear_iterations = 10000;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   int uzawa_sweeps = 30;  // Uzawa sweeps before switching to the exact condensed W (pcg only)
+  // Refactorization rule of the direct solver's modified Newton (docs/implicit.md). The factor
+  // of A is kept across Newton iterations and steps; the next iteration refactorizes when the
+  // last one, not yet converged, contracted the residual by less than this factor
+  // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
+  // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
+  // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
+  // first of each step.
+  double refactor_contraction = 0.5;  // [0, 1)
+  int refactor_iterations = 6;        // >= 1
 };
 
 class ImplicitIntegrator {
@@ -58,6 +69,7 @@ class ImplicitIntegrator {
   long newton_iterations_total() const { return newton_total_; }
   long linear_iterations_total() const { return linear_total_; }
   bool direct_solver() const { return direct_; }
+  long factorizations() const { return factorizations_; }
   long exact_contact_solves() const { return exact_contact_solves_; }
   long shifted_iterations() const { return shifted_iterations_; }
 
@@ -69,6 +81,7 @@ class ImplicitIntegrator {
   bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
   bool factorize();
   void use_direct();
+  bool column_cached(int slot, const Stencil& st, const Vec2& direction) const;
   void build_impulse();
   void add_reaction(int k);                                  // candidate k's reaction into impulse_
   LocalPair stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
@@ -89,8 +102,19 @@ class ImplicitIntegrator {
   SystemMatrix system_;
   Pcg pcg_;
   bool direct_ = false;
-  SparseLdlt ldlt_;
-  Eigen::MatrixXd columns_;   // A^-1 e for each active contact direction (2n x m)
+  CholmodFactor factor_;
+  long factor_id_ = 0;         // increases with every factorization: the version of the factor
+  bool refactor_next_ = true;  // the next Newton iteration assembles and factorizes A
+  int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
+  long factorizations_ = 0;
+  // A^-1 H^T e per contact candidate k and direction d (normal, tangent) in column
+  // dirs k + d (2n x dirs candidates). On the direct path a column is reused while the factor,
+  // the candidate's stencil and its direction are those it was computed with.
+  Eigen::MatrixXd columns_;
+  std::vector<long> column_factor_;      // factor_id_ of each column, -1: none
+  std::vector<Vec2> column_direction_;
+  std::vector<Stencil> column_stencil_;
+  std::vector<int> active_columns_;      // column of each active contact direction
   Eigen::MatrixXd w_;         // condensed compliance (m x m)
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
   Eigen::VectorXd r_vec_;     // dt R per active contact direction

@@ -120,7 +120,8 @@ struct RunResult {
   long contact_unconverged_steps = 0;  // steps that hit the sweep cap
   long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
   long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
-  bool direct_solver = false;      // implicit scheme: LDL^T (true) or PCG (false)
+  bool direct_solver = false;      // implicit scheme: CHOLMOD Cholesky (true) or PCG (false)
+  long factorizations = 0;         // implicit scheme, direct solver: numeric factorizations of A
   int threads = 0;                 // threads the run used: resolve_threads(settings.threads)
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time

@@ -1,0 +1,136 @@
+// The implicit scheme's linear algebra on the oblique plate's iteration matrix
+// A = M + theta xi dt^2 K_T (theta = xi = 1/2, u = 0, the pattern and values of a run's first
+// Newton iteration), per mesh and step: numeric factorization (symbolic analysis done once,
+// outside the timing) and one solve, for CHOLMOD's two methods and Eigen's SimplicialLDLT (the
+// hand-written sparse LDL^T that CHOLMOD replaced measured like the latter; docs/implicit.md),
+// and one Jacobi-PCG solve to 1e-12 for comparison. Times per call; run with
+// --benchmark_repetitions.
+#include <benchmark/benchmark.h>
+
+#include <Eigen/SparseCholesky>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench_common.hpp"
+#include "harness/input/case_setup.hpp"
+#include "solver/elements/tangent.hpp"
+#include "solver/linear/cholmod_factor.hpp"
+#include "solver/linear/pcg.hpp"
+
+namespace ricochet::bench {
+namespace {
+
+struct Matrix {
+  SystemMatrix system;
+  Eigen::VectorXd b;
+};
+
+// The iteration matrix of cases/oblique_plate.toml on `mesh` at step `dt` (built once per cell).
+const Matrix& iteration_matrix(const std::string& mesh, const std::string& dt) {
+  static std::string key;
+  static std::unique_ptr<Matrix> cached;
+  if (cached && key == mesh + dt) return *cached;
+  const CaseSpec spec = read_case(std::string(RICOCHET_SOURCE_DIR) + "/cases/oblique_plate.toml",
+                                  {"mesh=" + mesh, "time.dt=" + dt});
+  const PreparedCase pc = prepare_case(spec);
+  const Model& model = pc.model;
+  const double h = pc.settings.dt;
+  cached = std::make_unique<Matrix>();
+  cached->system = make_system_matrix(model);
+  const int n = model.num_dofs();
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n), v = model.initial_velocity, f(n);
+  assemble_system(model, u.data(), v.data(), 1.0, 0.25 * h * h, 0.5 * h, cached->system, f.data(), false);
+  cached->b = -h * f + model.mass;  // any smooth right-hand side with the scale of G
+  key = mesh + dt;
+  return *cached;
+}
+
+enum class Solver { cholmod_supernodal, cholmod_simplicial, eigen_simplicial_ldlt };
+
+void factorize(benchmark::State& state, Solver solver, const std::string& mesh, const std::string& dt) {
+  const Matrix& m = iteration_matrix(mesh, dt);
+  const auto& a = m.system.matrix;
+  Eigen::VectorXd x(a.rows());
+  bool ok = true;
+  if (solver == Solver::cholmod_supernodal || solver == Solver::cholmod_simplicial) {
+    CholmodFactor f;
+    f.analyze(a, solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
+                                                      : CholmodFactor::Method::simplicial);
+    for (auto _ : state) ok = ok && f.factorize(a.valuePtr());
+    state.counters["factor_nonzeros"] = f.factor_nonzeros();
+  } else {
+    const Eigen::SparseMatrix<double> col = a;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> f;
+    f.analyzePattern(col);
+    for (auto _ : state) {
+      f.factorize(col);
+      ok = ok && f.info() == Eigen::Success;
+    }
+  }
+  if (!ok) fail(state, "factorization failed");
+  state.counters["n"] = static_cast<double>(a.rows());
+}
+
+void solve(benchmark::State& state, Solver solver, const std::string& mesh, const std::string& dt) {
+  const Matrix& m = iteration_matrix(mesh, dt);
+  const auto& a = m.system.matrix;
+  Eigen::VectorXd x(a.rows());
+  CholmodFactor f;
+  f.analyze(a, solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
+                                                    : CholmodFactor::Method::simplicial);
+  if (!f.factorize(a.valuePtr())) fail(state, "factorization failed");
+  for (auto _ : state) {
+    f.solve(m.b, x);
+    benchmark::DoNotOptimize(x.data());
+  }
+}
+
+void pcg_solve(benchmark::State& state, const std::string& mesh, const std::string& dt) {
+  const Matrix& m = iteration_matrix(mesh, dt);
+  const auto& a = m.system.matrix;
+  Pcg pcg;
+  pcg.resize(static_cast<int>(a.rows()));
+  const Eigen::VectorXd inv_diag = m.system.diagonal.cwiseInverse();
+  Eigen::VectorXd x(a.rows());
+  int iterations = 0;
+  for (auto _ : state) {
+    x.setZero();
+    const PcgResult r = pcg.solve(a, inv_diag, m.b, x, 1e-12, 100000);
+    if (!r.converged) fail(state, "PCG did not converge");
+    iterations = r.iterations;
+  }
+  state.counters["cg_iterations"] = iterations;
+}
+
+const char* name(Solver s) {
+  switch (s) {
+    case Solver::cholmod_supernodal: return "cholmod_supernodal";
+    case Solver::cholmod_simplicial: return "cholmod_simplicial";
+    case Solver::eigen_simplicial_ldlt: return "eigen_simplicial_ldlt";
+  }
+  return "";
+}
+
+void register_all() {
+  for (const char* mesh : {"M1", "M2"})
+    for (const char* dt : {"1e-4", "1e-6"}) {
+      const std::string cell = std::string(mesh) + "/dt" + dt;
+      for (Solver s : {Solver::cholmod_supernodal, Solver::cholmod_simplicial, Solver::eigen_simplicial_ldlt})
+        benchmark::RegisterBenchmark(("linear_factorize/" + std::string(name(s)) + "/" + cell).c_str(),
+                                     [=](benchmark::State& st) { factorize(st, s, mesh, dt); })
+            ->Unit(benchmark::kMillisecond);
+      for (Solver s : {Solver::cholmod_supernodal, Solver::cholmod_simplicial})
+        benchmark::RegisterBenchmark(("linear_solve/" + std::string(name(s)) + "/" + cell).c_str(),
+                                     [=](benchmark::State& st) { solve(st, s, mesh, dt); })
+            ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("linear_solve/pcg/" + cell).c_str(),
+                                   [=](benchmark::State& st) { pcg_solve(st, mesh, dt); })
+          ->Unit(benchmark::kMicrosecond);
+    }
+}
+
+const int registered = (register_all(), 0);
+
+}  // namespace
+}  // namespace ricochet::bench

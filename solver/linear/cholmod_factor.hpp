@@ -1,0 +1,86 @@
+// Sparse Cholesky factorization of the implicit scheme's iteration matrix by SuiteSparse CHOLMOD
+// (Debian's libsuitesparse-dev), called through its C interface:
+//  - analyze() once per run: fill-reducing ordering (AMD), elimination tree, supernodes and
+//    the pattern of L; it also runs one factorization and one solve on a positive definite
+//    matrix of the same pattern, so that every block CHOLMOD's numeric phase asks for has been
+//    allocated once (see below);
+//  - factorize() per refactorization: P A P^T = L L^T (supernodal) or L D L^T (simplicial) into
+//    the analysed structure;
+//  - solve() per right-hand side: two triangular solves with reused CHOLMOD work vectors.
+//
+// The matrix is the scheme's full symmetric row-major SparseMatrix (both triangles stored),
+// passed to CHOLMOD without a copy: its row-major arrays read as column-major are the same
+// (symmetric) matrix, and CHOLMOD with stype = -1 reads only the lower triangle.
+//
+// Allocation: CHOLMOD allocates temporaries inside cholmod_factorize (the permuted transpose
+// of A, the supernodal update matrix) and frees them before it returns. All its allocations go
+// through the SuiteSparse_config function pointers, which this file points, once per process,
+// at a recycling allocator: a freed block is kept in a list for its exact size and handed back
+// on the next request of that size. The numeric phase of a fixed pattern asks for the same
+// sizes every time, so after analyze()'s warm-up factorize() and solve() of the simplicial
+// method (the implicit scheme's) take no memory from the heap (tests/test_cholmod_factor.cpp
+// and ImplicitStepsDoNotAllocate count it); the supernodal method still allocates. The kept
+// blocks (a few times the size of L) are returned to the heap only at process exit.
+//
+// Why not Eigen's CholmodSupport: its factorize() takes a column-major SparseMatrix (our
+// row-major matrix would be copied per factorization) and its solve() allocates a new
+// cholmod_dense per call.
+#pragma once
+
+#include <Eigen/SparseCore>
+
+struct cholmod_common_struct;
+struct cholmod_factor_struct;
+struct cholmod_dense_struct;
+
+namespace ricochet {
+
+class CholmodFactor {
+ public:
+  using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+  // Measured on the oblique plate's matrices (docs/implicit.md): with Debian's reference BLAS
+  // the supernodal factorization is up to 2x faster on M2 but its solve 2.4x slower, and the
+  // implicit scheme's modified Newton does many solves per factorization, so it uses simplicial.
+  enum class Method {
+    supernodal,  // L L^T with dense supernode blocks (BLAS)
+    simplicial,  // L D L^T column by column, no BLAS
+  };
+
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  // Symbolic analysis of the pattern of `a` (square, symmetric, both triangles stored,
+  // compressed; the pattern must not change afterwards, its values are read by factorize).
+  // Allocates. Replaces any previous analysis.
+  void analyze(const RowMajor& a, Method method = Method::simplicial);
+
+  // Numeric factorization of the matrix with a's pattern and the values a_values[0 .. nnz)
+  // (same layout as a.valuePtr()). Returns false if it is not positive definite (a pivot not
+  // positive; CHOLMOD stops there) or not finite; solve() must not be called after a false.
+  bool factorize(const double* a_values);
+
+  // x = A^-1 b with the last successful factorization (size n). x and b may be the same vector.
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+  int size() const { return n_; }
+  bool analyzed() const { return factor_ != nullptr; }
+  double factor_nonzeros() const;  // entries of L (supernodal: including the zeros of its blocks)
+  double factor_flops() const;     // floating-point operations of one factorization (CHOLMOD's count)
+
+ private:
+  void release();
+
+  cholmod_common_struct* common_ = nullptr;
+  cholmod_factor_struct* factor_ = nullptr;
+  cholmod_dense_struct* x_ = nullptr;  // solve2's solution and workspaces, reused
+  cholmod_dense_struct* y_ = nullptr;
+  cholmod_dense_struct* e_ = nullptr;
+  int n_ = 0;
+  long nnz_ = 0;
+  const int* outer_ = nullptr;  // the analysed matrix's arrays (read by factorize)
+  const int* inner_ = nullptr;
+};
+
+}  // namespace ricochet
