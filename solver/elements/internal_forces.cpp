@@ -57,12 +57,9 @@ struct ForcePass {
                                  double, int cell) {
     if constexpr (kSample) {
       // Every measure exactly (as von_mises_squared), the run's own as a ratio for the ranking.
-      VonMisesRatio x;
-      for (int m = 0; m < kStressMeasures; ++m) {
-        const VonMisesRatio rm = von_mises_ratio(mat, F, r.P, det_f, static_cast<StressMeasure>(m));
-        sampled[m] = std::max(sampled[m], rm.value());
-        if (m == static_cast<int>(measure)) x = rm;
-      }
+      const std::array<VonMisesRatio, kStressMeasures> all = von_mises_ratios(mat, F, r.P, det_f);
+      for (int m = 0; m < kStressMeasures; ++m) sampled[m] = std::max(sampled[m], all[m].value());
+      const VonMisesRatio x = all[static_cast<int>(measure)];
       cell_max = std::max(cell_max, x.value());
       if (!von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold)) return;
       rank<kPoints>(x, cell);

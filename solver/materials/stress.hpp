@@ -72,34 +72,58 @@ inline bool ratio_greater(const VonMisesRatio& a, const VonMisesRatio& b) {
   return a.num * b.den > b.num * a.den;
 }
 
-template <class Mat>
-inline VonMisesRatio von_mises_ratio(const Mat& mat, const Mat2& F, const Mat2& P, double det_f, StressMeasure measure) {
-  const auto o = mat.out_of_plane(F);
-  if (measure == StressMeasure::pk2) {
-    // det F * S = adj(F) P, and S33 scaled alike.
-    const double a11 = F(1, 1) * P(0, 0) - F(0, 1) * P(1, 0);
-    const double a12 = F(1, 1) * P(0, 1) - F(0, 1) * P(1, 1);
-    const double a21 = F(0, 0) * P(1, 0) - F(1, 0) * P(0, 0);
-    const double a22 = F(0, 0) * P(1, 1) - F(1, 0) * P(0, 1);
-    return {von_mises_squared(a11, a22, det_f * o.pk2, 0.5 * (a12 + a21)), det_f * det_f};
-  }
-  const double f33_2 = stretch33_squared(mat, F, o.stretch);
-  // tau = P F^T in scalars (see squared_norm).
+// The pieces of von_mises_ratio, from the material's out-of-plane state o (out_of_plane(F)).
+// det F * S = adj(F) P, and S33 scaled alike.
+template <class OutOfPlaneState>
+inline VonMisesRatio pk2_ratio(const Mat2& F, const Mat2& P, double det_f, const OutOfPlaneState& o) {
+  const double a11 = F(1, 1) * P(0, 0) - F(0, 1) * P(1, 0);
+  const double a12 = F(1, 1) * P(0, 1) - F(0, 1) * P(1, 1);
+  const double a21 = F(0, 0) * P(1, 0) - F(1, 0) * P(0, 0);
+  const double a22 = F(0, 0) * P(1, 1) - F(1, 0) * P(0, 1);
+  return {von_mises_squared(a11, a22, det_f * o.pk2, 0.5 * (a12 + a21)), det_f * det_f};
+}
+// vm(tau)^2 with F33^2 = f33_2; tau = P F^T in scalars (see squared_norm).
+template <class OutOfPlaneState>
+inline double kirchhoff_squared(const Mat2& F, const Mat2& P, double f33_2, const OutOfPlaneState& o) {
   const double t11 = P(0, 0) * F(0, 0) + P(0, 1) * F(0, 1);
   const double t22 = P(1, 0) * F(1, 0) + P(1, 1) * F(1, 1);
   const double t12 = 0.5 * (P(0, 0) * F(1, 0) + P(0, 1) * F(1, 1) + P(1, 0) * F(0, 0) + P(1, 1) * F(0, 1));
-  const double k2 = von_mises_squared(t11, t22, f33_2 * o.pk2, t12);
+  return von_mises_squared(t11, t22, f33_2 * o.pk2, t12);
+}
+
+template <class Mat>
+inline VonMisesRatio von_mises_ratio(const Mat& mat, const Mat2& F, const Mat2& P, double det_f, StressMeasure measure) {
+  const auto o = mat.out_of_plane(F);
+  if (measure == StressMeasure::pk2) return pk2_ratio(F, P, det_f, o);
+  const double f33_2 = stretch33_squared(mat, F, o.stretch);
+  const double k2 = kirchhoff_squared(F, P, f33_2, o);
   if (measure == StressMeasure::kirchhoff) return {k2, 1.0};
   return {k2, det_f * det_f * f33_2};  // J^2 = (det F F33)^2
+}
+
+// The three measures' ratios at one point, indexed by StressMeasure, each von_mises_ratio's,
+// with the material's out-of-plane state evaluated once (for a history sample, which needs
+// all three at every point).
+template <class Mat>
+inline std::array<VonMisesRatio, kStressMeasures> von_mises_ratios(const Mat& mat, const Mat2& F, const Mat2& P,
+                                                                   double det_f) {
+  const auto o = mat.out_of_plane(F);
+  const double f33_2 = stretch33_squared(mat, F, o.stretch);
+  const double k2 = kirchhoff_squared(F, P, f33_2, o);
+  std::array<VonMisesRatio, kStressMeasures> r;
+  r[static_cast<int>(StressMeasure::cauchy)] = {k2, det_f * det_f * f33_2};
+  r[static_cast<int>(StressMeasure::pk2)] = pk2_ratio(F, P, det_f, o);
+  r[static_cast<int>(StressMeasure::kirchhoff)] = {k2, 1.0};
+  return r;
 }
 
 // The three squared equivalents at one integration point, indexed by StressMeasure [Pa^2]
 // (for the history samples and the fields, not the per-step pass).
 template <class Mat>
 inline VonMises2 von_mises_squared(const Mat& mat, const Mat2& F, const Mat2& P, double det_f) {
+  const std::array<VonMisesRatio, kStressMeasures> r = von_mises_ratios(mat, F, P, det_f);
   VonMises2 out;
-  for (int m = 0; m < kStressMeasures; ++m)
-    out[m] = von_mises_ratio(mat, F, P, det_f, static_cast<StressMeasure>(m)).value();
+  for (int m = 0; m < kStressMeasures; ++m) out[m] = r[m].value();
   return out;
 }
 
