@@ -134,8 +134,9 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
     SCOPED_TRACE(std::string(scheme) + (variant.set.empty() ? "" : ", " + variant.set.back()));
     const PreparedCase base =
         prepare_case(read_case(file.string(), with({std::string("scheme=") + scheme}, variant.set)));
-    if (!variant.set.empty())
+    if (!variant.set.empty()) {
       EXPECT_GE(static_cast<std::size_t>(base.model.num_cells()), kForceParallelChunks * kForceChunkCells);
+    }
     std::vector<RunResult> results;
     for (const int threads : {1, 2}) {
       PreparedCase pc = base;

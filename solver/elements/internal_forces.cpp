@@ -110,25 +110,10 @@ void all_blocks(const Model& model, const double* u, const double* v, double* f,
     const ForceScratch::Chunk& k = x.chunks[c];
     ForceTotals& tc = x.totals[c];
     tc = start;
-    auto run = [&](const auto& b, auto viscous) {
-      std::visit(
-          [&](const auto& mat) {
-            element_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
-                                                     ForcePass<kEnergy, kStress, kSample>(cc, tc), tc, k.begin, k.end);
-          },
-          b.material);
-    };
-    if (k.kind == 0) {
-      const Q4HourglassBlock& b = model.q4_hourglass[k.block];
-      if (b.form == HourglassForm::viscous)
-        run(b, std::true_type{});
-      else
-        run(b, std::false_type{});
-    } else if (k.kind == 1) {
-      run(model.q4_full[k.block], std::false_type{});
-    } else {
-      run(model.t3[k.block], std::false_type{});
-    }
+    visit_block(model, k.kind, k.block, [&](const auto& b, const auto& mat, auto viscous) {
+      element_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
+                                               ForcePass<kEnergy, kStress, kSample>(cc, tc), tc, k.begin, k.end);
+    });
   };
   // Each node sums its cells' forces in the serial scatter's order, from 0 as f_int starts.
   auto gather = [&](int i) {
@@ -208,18 +193,16 @@ ForceScratch make_force_scratch(const Model& model) {
   ForceScratch x;
   std::size_t out = 0;
   std::vector<std::vector<int>> node_entries(model.num_nodes());
-  auto add = [&](int kind, int block, const auto& b) {
-    constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
-    for (std::size_t e0 = 0; e0 < b.conn.size(); e0 += kForceChunkCells)
-      x.chunks.push_back({kind, block, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
-    for (std::size_t e = 0; e < b.conn.size(); ++e)
-      for (int i = 0; i < N; ++i) node_entries[b.conn[e][i]].push_back(static_cast<int>(out + 2 * N * e + 2 * i));
-    out += 2 * N * b.conn.size();
-  };
-  // for_each_block's order.
-  for (std::size_t k = 0; k < model.q4_hourglass.size(); ++k) add(0, static_cast<int>(k), model.q4_hourglass[k]);
-  for (std::size_t k = 0; k < model.q4_full.size(); ++k) add(1, static_cast<int>(k), model.q4_full[k]);
-  for (std::size_t k = 0; k < model.t3.size(); ++k) add(2, static_cast<int>(k), model.t3[k]);
+  for (const BlockKind kind : kBlockKinds)  // for_each_block's order
+    for (std::size_t k = 0; k < model.num_blocks(kind); ++k)
+      visit_block(model, kind, k, [&](const auto& b, const auto&, auto) {
+        constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
+        for (std::size_t e0 = 0; e0 < b.conn.size(); e0 += kForceChunkCells)
+          x.chunks.push_back({kind, k, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
+        for (std::size_t e = 0; e < b.conn.size(); ++e)
+          for (int i = 0; i < N; ++i) node_entries[b.conn[e][i]].push_back(static_cast<int>(out + 2 * N * e + 2 * i));
+        out += 2 * N * b.conn.size();
+      });
   if (out > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw std::length_error("make_force_scratch: too many element-force entries for int indices");
   x.node_offsets.assign(1, 0);

@@ -44,8 +44,8 @@ struct ForceTotals {
 // equal the serial pass's, and no result depends on the number of threads.
 struct ForceScratch {
   struct Chunk {
-    int kind = 0;             // 0: q4_hourglass, 1: q4_full, 2: t3 (for_each_block's order)
-    int block = 0;            // index in its vector of blocks
+    BlockKind kind = BlockKind::q4_hourglass;
+    std::size_t block = 0;    // index among the model's blocks of that kind
     std::size_t begin = 0, end = 0;  // the block's cells begin <= e < end
     std::size_t out = 0;      // offset of the block's first cell in element_forces
   };

@@ -79,6 +79,11 @@ struct BodyInfo {
   std::vector<BoundaryEdge> boundary_edges;  // boundary_edges() of the body's mesh, global indices
 };
 
+// The model's element blocks by formulation, in the order every force pass visits them (and
+// so sums f_int): Q4 with hourglass control, Q4 2x2, T3.
+enum class BlockKind { q4_hourglass, q4_full, t3 };
+inline constexpr BlockKind kBlockKinds[] = {BlockKind::q4_hourglass, BlockKind::q4_full, BlockKind::t3};
+
 struct Model {
   PlaneMode plane = PlaneMode::stress;
   Eigen::Matrix2Xd ref;         // 2 x n reference coordinates, all bodies [m]
@@ -97,6 +102,9 @@ struct Model {
   int num_nodes() const { return static_cast<int>(ref.cols()); }
   int num_dofs() const { return 2 * num_nodes(); }
   int num_cells() const { return static_cast<int>(cell_dt.size()); }
+  std::size_t num_blocks(BlockKind kind) const {
+    return kind == BlockKind::q4_hourglass ? q4_hourglass.size() : kind == BlockKind::q4_full ? q4_full.size() : t3.size();
+  }
 };
 
 // Builds the model; throws std::invalid_argument for a cell with non-positive area or a
