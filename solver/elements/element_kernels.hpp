@@ -7,7 +7,8 @@
 // scatter into f, the energies and the smallest det F. The pass supplies the material response
 // at a point (first_piola, or first_piola_and_tangent for the tangent; plane stress and strain
 // are inside the material law) and what it does besides the forces: stress tracking or the
-// element matrix.
+// element matrix. element_kernel() goes cell by cell (the tangent); force_kernel(), below, is
+// the same formulation on kLanes cells at once (the force pass).
 #pragma once
 
 #include <algorithm>
@@ -18,6 +19,7 @@
 
 #include "solver/elements/internal_forces.hpp"
 #include "solver/elements/kinematics.hpp"
+#include "solver/materials/material_lanes.hpp"
 #include "solver/model/model.hpp"
 
 namespace ricochet {
@@ -199,6 +201,243 @@ template <bool kViscous, class Pass, class Mat, class Out>
   t.hourglass_energy += hg_energy;
   t.hourglass_power += hg_power;
   t.min_jacobian = min_j;
+  pass.finish(t);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The vectorized force kernels: force_kernel<kViscous>(block, material, u, v, out, pass, t, e0,
+// e1) does what element_kernel does with the force pass, kLanes cells at a time, from the
+// block's batches in structure-of-arrays form (ElementBlock::lane_conn, lane_geom): the gather,
+// F, the material law (material_lanes.hpp) and the nodal forces run on all lanes at once; then,
+// lane by lane in cell order, the forces go out and the pass's per-point work and the energy
+// sums run, so every sum keeps the serial kernel's order. Each lane's arithmetic is the serial
+// kernel's, Eigen's FMAs included (material_lanes.hpp): (vol dN/dX P^T)_ij =
+// fma(vol dN_i1, P_j1, vol dN_i0 P_j0) for four-node cells and the first two rows of a
+// triangle, the plain sum for its third row; sum_I gamma_I a_I is summed pairwise,
+// (a_0 g_0 + a_2 g_2) + (a_1 g_1 + a_3 g_3). e0 is a multiple of kLanes (the threaded pass's
+// chunks are); a last partial batch computes its padding lanes and drops them.
+// The pass provides, besides element_kernel's contract (with point() taking one more argument,
+// `may`):
+//   kPerPoint                          whether point(), begin_element() and end_element() do
+//                                      anything
+//   screen(mat, F, P, det, may)        on all lanes of a point: may[l] = 1.0 where point()
+//                                      has work (the cheap stress bound), else 0.0
+//   kEveryPoint                        point() at every point, not only where may[l] = 1.0
+
+namespace lanes {
+
+template <int N>
+struct Nodes {
+  alignas(64) double x[N][kLanes];
+  alignas(64) double y[N][kLanes];
+};
+
+template <int N>
+EIGEN_ALWAYS_INLINE void gather(const double* a, const int* conn, Nodes<N>& n) {
+  for (int i = 0; i < N; ++i)
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l) {
+      const int c = conn[i * kLanes + l];
+      n.x[i][l] = a[2 * c];
+      n.y[i][l] = a[2 * c + 1];
+    }
+}
+
+// F = I + ue^T dN/dX at a point whose gradients dN/dX (I, J) are at g[(2I + J) kLanes + l]
+// (deformation_gradient's order).
+template <int N>
+EIGEN_ALWAYS_INLINE void deformation_gradient(const Nodes<N>& ue, const double* g, LaneMat2& F) {
+#pragma omp simd
+  for (int l = 0; l < kLanes; ++l) {
+    double f00 = 1.0, f01 = 0.0, f10 = 0.0, f11 = 1.0;
+    for (int I = 0; I < N; ++I) {
+      const double d0 = g[(2 * I) * kLanes + l], d1 = g[(2 * I + 1) * kLanes + l];
+      f00 += ue.x[I][l] * d0;
+      f10 += ue.y[I][l] * d0;
+      f01 += ue.x[I][l] * d1;
+      f11 += ue.y[I][l] * d1;
+    }
+    F.m00[l] = f00;
+    F.m01[l] = f01;
+    F.m10[l] = f10;
+    F.m11[l] = f11;
+  }
+}
+
+// fe += vol dN/dX P^T (kFirst: fe = ...). kFused: Eigen's FMA form (see above).
+template <int N, bool kFirst>
+EIGEN_ALWAYS_INLINE void add_point_forces(const double* g, const double* vol, const LaneMat2& P, Nodes<N>& fe) {
+  for (int i = 0; i < N; ++i) {
+    const bool fused = N == 4 || i < 2;
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l) {
+      const double a0 = vol[l] * g[(2 * i) * kLanes + l], a1 = vol[l] * g[(2 * i + 1) * kLanes + l];
+      const double x = fused ? std::fma(a1, P.m01[l], a0 * P.m00[l]) : a0 * P.m00[l] + a1 * P.m01[l];
+      const double y = fused ? std::fma(a1, P.m11[l], a0 * P.m10[l]) : a0 * P.m10[l] + a1 * P.m11[l];
+      if constexpr (kFirst) {
+        fe.x[i][l] = x;
+        fe.y[i][l] = y;
+      } else {
+        fe.x[i][l] = fe.x[i][l] + x;
+        fe.y[i][l] = fe.y[i][l] + y;
+      }
+    }
+  }
+}
+
+template <int N>
+EIGEN_ALWAYS_INLINE Eigen::Matrix<double, N, 2> lane_rows(const Nodes<N>& n, int l) {
+  Eigen::Matrix<double, N, 2> m;
+  for (int i = 0; i < N; ++i) {
+    m(i, 0) = n.x[i][l];
+    m(i, 1) = n.y[i][l];
+  }
+  return m;
+}
+
+// Whether any of the n values is non-zero.
+EIGEN_ALWAYS_INLINE bool any(const double* x, int n) {
+  double s = 0.0;
+#pragma omp simd reduction(+ : s)
+  for (int i = 0; i < n; ++i) s += x[i];
+  return s != 0.0;
+}
+
+EIGEN_ALWAYS_INLINE void min_into(double* min_j, const double* det) {
+#pragma omp simd
+  for (int l = 0; l < kLanes; ++l) min_j[l] = std::min(min_j[l], det[l]);
+}
+
+}  // namespace lanes
+
+// T3 and Q4 2x2: kQ points per cell (T3: 1, its gradients and volume the cell's).
+template <bool kViscous, class Pass, class Mat, class Out, int N, class Geom>
+[[gnu::noinline, gnu::flatten]] void force_kernel(const ElementBlock<N, Geom>& b, const Mat& material,
+                                                  const double* u, const double*, const Out& out,
+                                                  const Pass& pass_in, ForceTotals& t, std::size_t e0 = 0,
+                                                  std::size_t e1 = SIZE_MAX) {
+  constexpr int kQ = std::is_same_v<Geom, Q4FullGeom> ? 4 : 1;
+  constexpr int kPointValues = 2 * N + 1;  // a point's gradients and volume in lane_geom
+  const Mat mat = material;  // see element_kernel
+  Pass pass = pass_in;
+  double energy = 0.0;
+  alignas(64) double min_j[kLanes];
+  std::fill(min_j, min_j + kLanes, t.min_jacobian);
+  LaneMat2 F[kQ], P[kQ];
+  alignas(64) double det[kQ][kLanes];
+  alignas(64) double may[kQ][kLanes] = {};  // 1: the pass's point() has work (screen)
+  const std::size_t end = std::min(e1, b.conn.size());
+  for (std::size_t e = e0; e < end; e += kLanes) {
+    const double* g = b.batch_geom(e / kLanes);
+    lanes::Nodes<N> ue, fe;
+    lanes::gather<N>(u, b.batch_conn(e / kLanes), ue);
+    for (int q = 0; q < kQ; ++q) {
+      const double* gq = g + q * kPointValues * kLanes;
+      lanes::deformation_gradient<N>(ue, gq, F[q]);
+      determinant_lanes(F[q], det[q]);
+      lanes::min_into(min_j, det[q]);
+      first_piola_lanes(mat, F[q], P[q]);
+      if constexpr (Pass::kPerPoint) pass.screen(mat, F[q], P[q], det[q], may[q]);
+      if (q == 0)
+        lanes::add_point_forces<N, true>(gq, gq + 2 * N * kLanes, P[q], fe);
+      else
+        lanes::add_point_forces<N, false>(gq, gq + 2 * N * kLanes, P[q], fe);
+    }
+    const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
+    // The pass's per-cell work only in a batch where some point has any (most batches of a
+    // step have none: the points are below the run's stress peak so far).
+    const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes::any(may[0], kQ * kLanes));
+    for (int l = 0; l < n; ++l) {
+      const std::size_t c = e + l;
+      const int cell = b.first_cell + static_cast<int>(c);
+      if (per_point) {
+        pass.begin_element();
+        for (int q = 0; q < kQ; ++q)
+          if (Pass::kEveryPoint || may[q][l] != 0.0)
+            pass.template point<kQ>(mat, F[q].lane(l), det[q][l], typename Pass::Response{P[q].lane(l)}, nullptr,
+                                    g[(q * kPointValues + 2 * N) * kLanes + l], cell, may[q][l] != 0.0);
+      }
+      if constexpr (Pass::kEnergy)
+        for (int q = 0; q < kQ; ++q) energy += g[(q * kPointValues + 2 * N) * kLanes + l] * mat.energy_density(F[q].lane(l));
+      out.template put<N>(c, b.conn[c], lanes::lane_rows<N>(fe, l));
+      if (per_point) pass.template end_element<kQ>(c, cell);
+    }
+  }
+  t.strain_energy += energy;
+  t.min_jacobian = *std::min_element(min_j, min_j + kLanes);
+  pass.finish(t);
+}
+
+// Q4 one-point with Flanagan-Belytschko hourglass control (element_kernel's third kernel).
+template <bool kViscous, class Pass, class Mat, class Out>
+[[gnu::noinline, gnu::flatten]] void force_kernel(const Q4HourglassBlock& b, const Mat& material, const double* u,
+                                                  const double* v, const Out& out, const Pass& pass_in,
+                                                  ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
+  const Mat mat = material;  // see element_kernel
+  Pass pass = pass_in;
+  double energy = 0.0, hg_energy = 0.0, hg_power = 0.0;
+  alignas(64) double min_j[kLanes];
+  std::fill(min_j, min_j + kLanes, t.min_jacobian);
+  LaneMat2 F, P;
+  alignas(64) double det[kLanes], qx[kLanes], qy[kLanes], Qx[kLanes], Qy[kLanes];
+  alignas(64) double may[kLanes] = {};
+  const std::size_t end = std::min(e1, b.conn.size());
+  for (std::size_t e = e0; e < end; e += kLanes) {
+    const double* g = b.batch_geom(e / kLanes);
+    const double* gamma = g + 8 * kLanes;
+    const double* vol = g + 12 * kLanes;
+    const double* coeff = g + 13 * kLanes;
+    const int* conn = b.batch_conn(e / kLanes);
+    lanes::Nodes<4> ue, fe;
+    lanes::gather<4>(u, conn, ue);
+    lanes::deformation_gradient<4>(ue, g, F);
+    determinant_lanes(F, det);
+    lanes::min_into(min_j, det);
+    first_piola_lanes(mat, F, P);
+    if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
+    lanes::add_point_forces<4, true>(g, vol, P, fe);
+    // q = sum_I gamma_I a_I, Q = c q, f_I += gamma_I Q.
+    lanes::Nodes<4> va;
+    if constexpr (kViscous) lanes::gather<4>(v, conn, va);
+    const lanes::Nodes<4>& a = kViscous ? va : ue;
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l) {
+      const double g0 = gamma[l], g1 = gamma[kLanes + l], g2 = gamma[2 * kLanes + l], g3 = gamma[3 * kLanes + l];
+      qx[l] = (a.x[0][l] * g0 + a.x[2][l] * g2) + (a.x[1][l] * g1 + a.x[3][l] * g3);
+      qy[l] = (a.y[0][l] * g0 + a.y[2][l] * g2) + (a.y[1][l] * g1 + a.y[3][l] * g3);
+      Qx[l] = coeff[l] * qx[l];
+      Qy[l] = coeff[l] * qy[l];
+    }
+    for (int i = 0; i < 4; ++i)
+#pragma omp simd
+      for (int l = 0; l < kLanes; ++l) {
+        fe.x[i][l] = fe.x[i][l] + gamma[i * kLanes + l] * Qx[l];
+        fe.y[i][l] = fe.y[i][l] + gamma[i * kLanes + l] * Qy[l];
+      }
+    const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
+    const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes::any(may, kLanes));  // see above
+    for (int l = 0; l < n; ++l) {
+      const std::size_t c = e + l;
+      const int cell = b.first_cell + static_cast<int>(c);
+      if (per_point) {
+        pass.begin_element();
+        if (Pass::kEveryPoint || may[l] != 0.0)
+          pass.template point<1>(mat, F.lane(l), det[l], typename Pass::Response{P.lane(l)}, nullptr, vol[l], cell,
+                                 may[l] != 0.0);
+      }
+      if constexpr (kViscous)
+        hg_power += Qx[l] * qx[l] + Qy[l] * qy[l];
+      else if constexpr (Pass::kEnergy)
+        hg_energy += 0.5 * coeff[l] * (qx[l] * qx[l] + qy[l] * qy[l]);
+      out.template put<4>(c, b.conn[c], lanes::lane_rows<4>(fe, l));
+      if (per_point) pass.template end_element<1>(c, cell);
+      if constexpr (Pass::kEnergy) energy += vol[l] * mat.energy_density(F.lane(l));
+    }
+  }
+  t.strain_energy += energy;
+  t.hourglass_energy += hg_energy;
+  t.hourglass_power += hg_power;
+  t.min_jacobian = *std::min_element(min_j, min_j + kLanes);
   pass.finish(t);
 }
 

@@ -24,6 +24,8 @@ template <bool kEnergy_, int kStress, bool kSample>
 struct ForcePass {
   static_assert(!kSample || kStress > 0, "a sample pass ranks the stresses too");
   static constexpr bool kEnergy = kEnergy_;
+  static constexpr bool kPerPoint = kStress > 0;
+  static constexpr bool kEveryPoint = kSample;  // point() at every point, not only where screen() allows
   static constexpr StressMeasure measure = static_cast<StressMeasure>(kStress > 0 ? kStress - 1 : 0);
   StressPeaks peaks;
   double threshold = 0.0;
@@ -50,22 +52,27 @@ struct ForcePass {
     if constexpr (kStress) vm2 = VonMisesRatio{};
     if constexpr (kSample) cell_max = 0.0;
   }
+  // Which of kLanes points may exceed the threshold (the cheap bound, on all lanes at once).
+  template <class Mat>
+  EIGEN_ALWAYS_INLINE void screen(const Mat& mat, const LaneMat2& F, const LaneMat2& P, const double* det,
+                                  double* may) const {
+    von_mises_may_exceed_lanes<measure>(mat, F, P, det, threshold, may);
+  }
+  // A point that may exceed the threshold (`may`, from screen()), or with kSample every point.
   // One-point cells are ranked by their point; cells of several points by the largest of
   // their points, at the end of the cell.
   template <int kPoints, class Mat, class Rows>
   EIGEN_ALWAYS_INLINE void point(const Mat& mat, const Mat2& F, double det_f, const Response& r, const Rows&,
-                                 double, int cell) {
+                                 double, int cell, bool may) {
     if constexpr (kSample) {
       // Every measure exactly (as von_mises_squared), the run's own as a ratio for the ranking.
       const std::array<VonMisesRatio, kStressMeasures> all = von_mises_ratios(mat, F, r.P, det_f);
       for (int m = 0; m < kStressMeasures; ++m) sampled[m] = std::max(sampled[m], all[m].value());
       const VonMisesRatio x = all[static_cast<int>(measure)];
       cell_max = std::max(cell_max, x.value());
-      if (!von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold)) return;
-      rank<kPoints>(x, cell);
+      if (may) rank<kPoints>(x, cell);
     } else if constexpr (kStress) {
-      if (von_mises_may_exceed(mat, F, r.P, det_f, measure, threshold))
-        rank<kPoints>(von_mises_ratio(mat, F, r.P, det_f, measure), cell);
+      if (may) rank<kPoints>(von_mises_ratio(mat, F, r.P, det_f, measure), cell);
     }
   }
   template <int kPoints>
@@ -97,7 +104,7 @@ void all_blocks(const Model& model, const double* u, const double* v, double* f,
                 ForceTotals& t, ForceScratch* scratch) {
   if (!scratch) {
     for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
-      element_kernel<decltype(viscous)::value>(b, mat, u, v, DirectScatter{f}, ForcePass<kEnergy, kStress, kSample>(cc, t),
+      force_kernel<decltype(viscous)::value>(b, mat, u, v, DirectScatter{f}, ForcePass<kEnergy, kStress, kSample>(cc, t),
                                                t);
     });
     return;
@@ -111,7 +118,7 @@ void all_blocks(const Model& model, const double* u, const double* v, double* f,
     ForceTotals& tc = x.totals[c];
     tc = start;
     visit_block(model, k.kind, k.block, [&](const auto& b, const auto& mat, auto viscous) {
-      element_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
+      force_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
                                                ForcePass<kEnergy, kStress, kSample>(cc, tc), tc, k.begin, k.end);
     });
   };

@@ -55,7 +55,8 @@ struct ForceScratch {
   std::vector<double> element_forces;
   std::vector<ForceTotals> totals;  // per chunk
 };
-inline constexpr std::size_t kForceChunkCells = 256;
+inline constexpr std::size_t kForceChunkCells = 256;  // a multiple of kLanes (the vectorized kernels start batches at a chunk's start)
+static_assert(kForceChunkCells % kLanes == 0);
 // Below this many chunks the pass runs on one thread (the same arithmetic): a parallel region
 // costs more than it saves on a small model.
 inline constexpr std::size_t kForceParallelChunks = 4;

@@ -147,8 +147,14 @@ Model build_model(const std::vector<BodyInput>& inputs, PlaneMode plane, const V
       }
       model.cell_dt[cell0 + q] = q4_characteristic_length(x) / cp;
     }
-    if (!full.conn.empty()) model.q4_full.push_back(std::move(full));
-    if (!hg.conn.empty()) model.q4_hourglass.push_back(std::move(hg));
+    if (!full.conn.empty()) {
+      pack_lanes(full);
+      model.q4_full.push_back(std::move(full));
+    }
+    if (!hg.conn.empty()) {
+      pack_lanes(hg);
+      model.q4_hourglass.push_back(std::move(hg));
+    }
 
     T3Block tri;
     tri.body = bi;
@@ -171,7 +177,10 @@ Model build_model(const std::vector<BodyInput>& inputs, PlaneMode plane, const V
       tri.geom.push_back(tg);
       model.cell_dt[tri.first_cell + k] = t3_characteristic_length(x) / cp;
     }
-    if (!tri.conn.empty()) model.t3.push_back(std::move(tri));
+    if (!tri.conn.empty()) {
+      pack_lanes(tri);
+      model.t3.push_back(std::move(tri));
+    }
 
     node0 += m.num_nodes();
     cell0 += m.num_cells();

@@ -2,7 +2,9 @@
 // geometry (shape-function gradients, volumes, hourglass vectors) is computed once.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -37,19 +39,32 @@ struct BodyInput {
 using Grad4 = Eigen::Matrix<double, 4, 2>;  // rows = element nodes, cols = dN/dX, dN/dY [1/m]
 using Grad3 = Eigen::Matrix<double, 3, 2>;
 
+// Each geometry also lists its values as lane_value(k), 0 <= k < kLaneValues: the order in
+// which ElementBlock::lane_geom stores them for the vectorized force kernels.
 struct Q4FullGeom {
   std::array<Grad4, 4> dndx;  // at the 2x2 Gauss points
   std::array<double, 4> vol;  // Gauss weight * det J0 * thickness [m^3]
+  // Per point q: dN/dX (I, J) at 9q + 2I + J, the volume at 9q + 8.
+  static constexpr int kLaneValues = 36;
+  double lane_value(int k) const { return k % 9 == 8 ? vol[k / 9] : dndx[k / 9](k % 9 / 2, k % 9 % 2); }
 };
 struct Q4HourglassGeom {
   Grad4 dndx;                  // mean (= centroid) gradients
   Eigen::Vector4d gamma;       // FB hourglass vector, orthogonal to linear fields [-]
   double vol = 0.0;            // A0 * thickness [m^3]
   double hourglass_coeff = 0.0;  // c of HourglassControl: [kg/s] viscous or [N/m] stiffness
+  // dN/dX (I, J) at 2I + J, gamma_I at 8 + I, then the volume and c.
+  static constexpr int kLaneValues = 14;
+  double lane_value(int k) const {
+    return k < 8 ? dndx(k / 2, k % 2) : k < 12 ? gamma(k - 8) : k == 12 ? vol : hourglass_coeff;
+  }
 };
 struct T3Geom {
   Grad3 dndx;
   double vol = 0.0;  // A0 * thickness [m^3]
+  // dN/dX (I, J) at 2I + J, then the volume.
+  static constexpr int kLaneValues = 7;
+  double lane_value(int k) const { return k < 6 ? dndx(k / 2, k % 2) : vol; }
 };
 
 // One body's cells of one formulation. `first_cell` is the index of the block's first cell in
@@ -61,7 +76,32 @@ struct ElementBlock {
   Material material;
   std::vector<std::array<int, N>> conn;  // global node indices
   std::vector<Geom> geom;
+  // The same cells in batches of kLanes, structure of arrays, for the vectorized force
+  // kernels (element_kernels.hpp). Batch k covers cells k kLanes ... k kLanes + kLanes - 1;
+  // the last batch is padded with copies of the last cell. In a batch's records
+  // (batch_conn, batch_geom) node I of lane l is at I kLanes + l and geometry value j
+  // (Geom::lane_value) of lane l at j kLanes + l. Made by pack_lanes().
+  std::vector<int> lane_conn;
+  std::vector<double> lane_geom;
+  std::size_t num_batches() const { return (conn.size() + kLanes - 1) / kLanes; }
+  const int* batch_conn(std::size_t k) const { return lane_conn.data() + k * N * kLanes; }
+  const double* batch_geom(std::size_t k) const { return lane_geom.data() + k * Geom::kLaneValues * kLanes; }
 };
+
+// Fills b.lane_conn and b.lane_geom from b.conn and b.geom.
+template <int N, class Geom>
+void pack_lanes(ElementBlock<N, Geom>& b) {
+  const std::size_t batches = b.num_batches();
+  b.lane_conn.assign(batches * N * kLanes, 0);
+  b.lane_geom.assign(batches * Geom::kLaneValues * kLanes, 0.0);
+  for (std::size_t k = 0; k < batches; ++k)
+    for (int l = 0; l < kLanes; ++l) {
+      const std::size_t e = std::min(k * kLanes + l, b.conn.size() - 1);
+      for (int i = 0; i < N; ++i) b.lane_conn[(k * N + i) * kLanes + l] = b.conn[e][i];
+      for (int j = 0; j < Geom::kLaneValues; ++j)
+        b.lane_geom[(k * Geom::kLaneValues + j) * kLanes + l] = b.geom[e].lane_value(j);
+    }
+}
 using Q4FullBlock = ElementBlock<4, Q4FullGeom>;
 struct Q4HourglassBlock : ElementBlock<4, Q4HourglassGeom> {
   HourglassForm form = HourglassForm::viscous;

@@ -13,4 +13,8 @@ using Mat2 = Eigen::Matrix2d;
 // uses it too (a slab of that depth), so energies and forces are per body, never per metre.
 enum class PlaneMode { stress, strain };
 
+// Cells per batch of the vectorized force kernels (element_kernels.hpp): one AVX-512 register
+// of doubles, two AVX2 registers.
+inline constexpr int kLanes = 8;
+
 }  // namespace ricochet

@@ -1,6 +1,43 @@
 #include "solver/schemes/central_difference.hpp"
 
+#include <omp.h>
+
 namespace ricochet {
+namespace {
+
+// fn(i0, i1) over the DOFs i0 <= i < i1: all of them on this thread, or one contiguous part
+// per thread where the force pass uses the run's threads (a model of at least
+// kForceParallelChunks chunks). fn works on each entry alone, so the results do not depend on
+// the number of threads.
+template <class Fn>
+void for_dof_ranges(const State& s, Fn&& fn) {
+  const long n = s.u.size();
+  if (s.force_scratch.chunks.size() >= kForceParallelChunks && omp_get_max_threads() > 1) {
+#pragma omp parallel
+    {
+      const long t = omp_get_thread_num(), nt = omp_get_num_threads();
+      fn(n * t / nt, n * (t + 1) / nt);
+    }
+  } else {
+    fn(0L, n);
+  }
+}
+
+// a = M^-1 (f_ext - f_int) on DOFs i0 <= i < i1 (restrict: the loops vectorize).
+void accelerations(long i0, long i1, double* __restrict a, const double* __restrict inv_mass,
+                   const double* __restrict f_ext, const double* __restrict f_int) {
+  for (long i = i0; i < i1; ++i) a[i] = inv_mass[i] * (f_ext[i] - f_int[i]);
+}
+
+// v_{n+1/2} = v_{n-1/2} + dt a_n, u_{n+1} = u_n + dt v_{n+1/2} on DOFs i0 <= i < i1.
+void advance(long i0, long i1, double dt, double* __restrict v, double* __restrict u, const double* __restrict a) {
+  for (long i = i0; i < i1; ++i) {
+    v[i] += dt * a[i];
+    u[i] += dt * v[i];
+  }
+}
+
+}  // namespace
 
 State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
                     const Eigen::VectorXd& initial_displacement) {
@@ -30,7 +67,9 @@ void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, 
               bool with_energy, const StressTracking* stress) {
   s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy, stress,
                              &s.force_scratch);
-  s.a = model.inv_mass.cwiseProduct(s.f_ext - s.f_int);
+  for_dof_ranges(s, [&](long i0, long i1) {
+    accelerations(i0, i1, s.a.data(), model.inv_mass.data(), s.f_ext.data(), s.f_int.data());
+  });
   s.hourglass_dissipation += s.dt * s.forces.hourglass_power;
   if (s.step == 0) s.v_half -= 0.5 * s.dt * s.a;
   // Prescribed DOFs: the acceleration that lands v_{n+1/2} on its prescribed value; the
@@ -53,8 +92,8 @@ void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, 
 }
 
 void update(State& s) {
-  s.v_half += s.dt * s.a;
-  s.u += s.dt * s.v_half;
+  const double dt = s.dt;
+  for_dof_ranges(s, [&](long i0, long i1) { advance(i0, i1, dt, s.v_half.data(), s.u.data(), s.a.data()); });
   ++s.step;
   s.time = static_cast<double>(s.step) * s.dt;
 }
