@@ -720,7 +720,7 @@ TEST(GateFile, RejectsBadFilesNamingFileLineAndKey) {
   expect_rejected("[[gate]]\nname = \"x\"\ncolumn = \"a\"\n",
                   {"ci/gates/bad.toml:1: gate[0].kind: missing required key"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\ncolumn = \"a\"\nlimit = 1\nlimt = 2\n",
-                  {"ci/gates/bad.toml:6: gate[0].limt: unknown key; allowed here:", "limit", "strict"});
+                  {"ci/gates/bad.toml:6: gate[0].limt: unknown key (did you mean \"limit\"?); allowed here:", "strict"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\nlimit = 1\n",
                   {"ci/gates/bad.toml:1: gate[0].column: missing required key"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\ncolumn = \"\"\nlimit = 1\n",
@@ -758,7 +758,7 @@ TEST(GateFile, RejectsBadFilesNamingFileLineAndKey) {
                   {"ci/gates/bad.toml:6: gate[1].name: duplicate gate name \"x\" (also gate[0])"});
   expect_rejected("name = \"suite\"\n", {"ci/gates/bad.toml:1: gate: no [[gate]] tables"});
   expect_rejected("requre_rows = 3\n[[gate]]\nkind = \"count\"\nmax = 0\n",
-                  {"ci/gates/bad.toml:1: requre_rows: unknown key; allowed here:", "require_rows"});
+                  {"ci/gates/bad.toml:1: requre_rows: unknown key (did you mean \"require_rows\"?); allowed here:"});
   expect_rejected("[[gate]\nkind = 1\n", {"ci/gates/bad.toml:1: TOML syntax error"});
 }
 

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "harness/input/case_spec.hpp"
+#include "harness/input/suggest.hpp"
 #include "harness/input/toml_reader.hpp"
 #include "solver/schemes/threads.hpp"
 
@@ -205,7 +206,7 @@ ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* ra
     if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
     std::string allowed;
     for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
-    t.fail(key, "unknown key for type = \"" + type + "\"; allowed here: " + allowed);
+    t.fail(key, "unknown key for type = \"" + type + "\"" + did_you_mean(key, keys) + "; allowed here: " + allowed);
   }
   if (const std::string e = obstacle_error(o.shape); !e.empty()) t.fail("type", e);
   return o;
@@ -240,14 +241,23 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   meshes->finish();
   if (c.meshes.empty()) root.fail("meshes", "define at least one mesh as [meshes.NAME]");
-  if (!c.default_mesh.empty() && !c.meshes.count(c.default_mesh))
-    root.fail("mesh", "no mesh named \"" + c.default_mesh + "\" in [meshes]");
+  // A mesh name that is not defined: say which are, and the likely one.
+  auto unknown_mesh = [&](const std::string& name) {
+    std::vector<std::string> names;
+    std::string defined;
+    for (const auto& [n, m] : c.meshes) {
+      names.push_back(n);
+      defined += (defined.empty() ? "" : ", ") + n;
+    }
+    return "no mesh named \"" + name + "\" in [meshes]" + did_you_mean(name, names) + "; defined: " + defined;
+  };
+  if (!c.default_mesh.empty() && !c.meshes.count(c.default_mesh)) root.fail("mesh", unknown_mesh(c.default_mesh));
 
   const auto bodies = root.tables("bodies");
   if (bodies.empty()) root.fail("bodies", "missing: define at least one [[bodies]]");
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     BodySpec b = read_body(bodies[i], static_cast<int>(i), c.default_mesh);
-    if (!c.meshes.count(b.mesh)) bodies[i].fail("mesh", "no mesh named \"" + b.mesh + "\" in [meshes]");
+    if (!c.meshes.count(b.mesh)) bodies[i].fail("mesh", unknown_mesh(b.mesh));
     for (const auto& other : c.bodies)
       if (other.name == b.name) bodies[i].fail("name", "duplicate body name \"" + b.name + "\"");
     c.bodies.push_back(std::move(b));

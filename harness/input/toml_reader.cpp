@@ -1,5 +1,7 @@
 #include "harness/input/toml_reader.hpp"
 
+#include "harness/input/suggest.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -108,7 +110,13 @@ bool TableReader::is_text(std::string_view key) const {
 const toml::node& TableReader::require(std::string_view key) const {
   read_.insert(std::string(key));
   const toml::node* n = find(key);
-  if (!n) fail(key, "missing required key");
+  if (!n) {
+    // A key of the table close to the missing one is likely it, misspelt.
+    std::vector<std::string> present;
+    for (auto&& [k, v] : *table_) present.emplace_back(k.str());
+    const std::string typo = closest_name(key, present);
+    fail(key, "missing required key" + (typo.empty() ? std::string() : " (the table has \"" + typo + "\": a typo?)"));
+  }
   return *n;
 }
 
@@ -250,7 +258,7 @@ void TableReader::finish() const {
     if (read_.count(key.str())) continue;
     std::string allowed;
     for (const auto& r : read_) allowed += (allowed.empty() ? "" : ", ") + r;
-    fail(key.str(), "unknown key; allowed here: " + allowed);
+    fail(key.str(), "unknown key" + did_you_mean(key.str(), read_) + "; allowed here: " + allowed);
   }
 }
 
