@@ -218,6 +218,27 @@ TEST_F(CliTest, UnknownNamesSuggestTheLikelyOne) {
   expect_rejected(replace(kGood, "mesh = \"m\"", "mesh = \"q\""), "", {"no mesh named \"q\" in [meshes] (did you mean \"m\"?); defined: m"});
 }
 
+// A node that starts inside an obstacle or inside the other body of a contact pair is bad
+// input, named with its depth, not a divergence at t = 0; a body resting on a surface is not.
+TEST_F(CliTest, RejectsInitialPenetration) {
+  // The rectangle spans y in [0, 0.05]; a ground at y = 0.002 holds its bottom row 2 mm deep.
+  const std::string contact = "scheme = \"semi_explicit\"\n" + kGood;
+  const std::string ground = "[[obstacles]]\nname = \"floor\"\npoint = [0.0, 0.002]\nnormal = [0.0, 1.0]\n";
+  expect_rejected(contact + ground, "",
+                  {"bodies[0] (\"b\") node 0 at (0, 0) starts inside obstacles[0] (\"floor\"), 0.002 m deep"});
+  // Resting on it (gap 0) runs.
+  const std::string resting = "[[obstacles]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n";
+  const Outcome o = run("run " + write("case.toml", contact + resting) + " --out " + out() + " --quiet");
+  EXPECT_EQ(o.status, 0) << o.output;
+  fs::remove_all(out());
+  // Two bodies of a contact pair that overlap by 5 mm.
+  const std::string pair = replace(contact, "[[bodies]]", "[meshes.m2]\ngenerator = \"rectangle\"\nwidth = 0.1\nheight = 0.05\n"
+                                                        "nx = 4\nny = 2\norigin = [0.095, 0.0]\n[[bodies]]") +
+                           "[[bodies]]\nname = \"c\"\nmesh = \"m2\"\n[bodies.material]\nyoung = 1e6\npoisson = 0.3\ndensity = 1000.0\n"
+                           "[[contact_pairs]]\nslave = \"b\"\nmaster = \"c\"\n";
+  expect_rejected(pair, "", {"body \"b\" node 9 at (0.1, 0.025) starts inside body \"c\" of a contact pair, 0.005 m deep"});
+}
+
 TEST_F(CliTest, RejectsWrongType) {
   expect_rejected(replace(kGood, "young = 1e6", "young = \"stiff\""), "", {"bodies[0].material.young", "expected a number"});
 }

@@ -1,7 +1,9 @@
 #include "harness/input/case_setup.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
+#include <utility>
 
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
@@ -56,6 +58,81 @@ const std::vector<int>& node_set(const CaseSpec& c, const Mesh& m, const std::st
     throw InputError(c.file + ": " + where + "." + key + ": no node set \"" + name +
                      "\" in this body; available: " + set_names(m));
   return it->second;
+}
+
+
+// A node that starts inside an obstacle or inside another body of a contact pair is an input
+// error, not a divergence at t = 0: the first line that names what, where and how deep.
+// Tolerance: depth > 1e-9 of the body's size (the diagonal of its reference bounding box), so
+// a node placed on a surface (a gap of 0 up to round-off) is not reported.
+double body_size(const Model& model, const BodyInfo& b) {
+  const auto x = model.ref.middleCols(b.first_node, b.num_nodes);
+  return (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
+}
+
+std::string point_text(const Vec2& x) {
+  char buf[80];
+  std::snprintf(buf, sizeof buf, "(%.6g, %.6g)", x.x(), x.y());
+  return buf;
+}
+
+std::string depth_text(double d) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.3g m", d);
+  return buf;
+}
+
+// Distance from x to the master body's boundary and whether x is inside it (even-odd rule
+// over its boundary edges, which close every outline and hole).
+std::pair<double, bool> inside_body(const Model& model, const BodyInfo& master, const Vec2& x) {
+  bool inside = false;
+  double dist = 1e300;
+  for (const BoundaryEdge& e : master.boundary_edges) {
+    const Vec2 a = model.ref.col(e.a), b = model.ref.col(e.b);
+    if ((a.y() > x.y()) != (b.y() > x.y()) &&
+        x.x() < a.x() + (x.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
+      inside = !inside;
+    const Vec2 ab = b - a;
+    const double t = std::clamp((x - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    dist = std::min(dist, (a + t * ab - x).norm());
+  }
+  return {dist, inside};
+}
+
+void check_initial_penetration(const CaseSpec& c, const Model& model, const RunSettings& s) {
+  for (std::size_t bi = 0; bi < model.bodies.size(); ++bi) {
+    const BodyInfo& b = model.bodies[bi];
+    const double tol = 1e-9 * body_size(model, b);
+    for (std::size_t o = 0; o < s.obstacles.size(); ++o) {
+      int worst = -1;
+      double depth = tol;
+      for (int node : b.boundary_nodes) {
+        const double d = -closest(s.obstacles[o], model.ref.col(node)).gap;
+        if (d > depth) depth = d, worst = node;
+      }
+      if (worst >= 0)
+        throw InputError(c.file + ": " + c.bodies[bi].where + " (\"" + b.name + "\") node " +
+                         std::to_string(worst - b.first_node) + " at " + point_text(model.ref.col(worst)) +
+                         " starts inside " + c.obstacles[o].where + " (\"" + c.obstacles[o].name + "\"), " +
+                         depth_text(depth) + " deep (the deepest node); move the body or the obstacle");
+    }
+  }
+  for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
+    const BodyInfo& slave = model.bodies[s.body_pairs[k].slave];
+    const BodyInfo& master = model.bodies[s.body_pairs[k].master];
+    const double tol = 1e-9 * std::max(body_size(model, slave), body_size(model, master));
+    int worst = -1;
+    double depth = tol;
+    for (int node : slave.boundary_nodes) {
+      const auto [d, inside] = inside_body(model, master, model.ref.col(node));
+      if (inside && d > depth) depth = d, worst = node;
+    }
+    if (worst >= 0)
+      throw InputError(c.file + ": body \"" + slave.name + "\" node " + std::to_string(worst - slave.first_node) +
+                       " at " + point_text(model.ref.col(worst)) + " starts inside body \"" + master.name +
+                       "\" of a contact pair, " + depth_text(depth) +
+                       " deep (the deepest node); move one of the bodies");
+  }
 }
 
 }  // namespace
@@ -138,6 +215,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     s.body_pairs.push_back({slave, master, cp.friction});
     if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction});
   }
+  check_initial_penetration(c, p.model, s);
   s.contact = c.contact;
   s.penalty = c.penalty;
   s.contact_method = c.scheme == Scheme::explicit_penalty ? RunSettings::ContactMethod::penalty
