@@ -3,11 +3,30 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "solver/observers/run_monitor.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
+namespace {
+
+// The round-off floor of the internal nodal forces [N]: a cell's stress carries an error of
+// about eps (lambda + 2 mu) from the cancellation in E = (F^T F - I)/2 near F = I, and its
+// nodal forces about that times its size and thickness; 16 such errors, of the stiffest cell.
+// (lambda + 2 mu) = rho c_p^2 and the cell size L_e = c_p cell_dt (model.hpp).
+double internal_force_roundoff(const Model& model) {
+  double f = 0.0;
+  for (const BodyInfo& b : model.bodies) {
+    const double rho = material_density(b.material), c = material_wave_speed(b.material);
+    double size = 0.0;
+    for (int k = b.first_cell; k < b.first_cell + b.num_cells; ++k) size = std::max(size, c * model.cell_dt[k]);
+    f = std::max(f, 16.0 * std::numeric_limits<double>::epsilon() * rho * c * c * size * b.thickness);
+  }
+  return f;
+}
+
+}  // namespace
 namespace {
 
 bool same_stencil(const Stencil& a, const Stencil& b) {
@@ -27,6 +46,7 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
   x_free_.assign(contact_.candidates.size(), {});
   weight_.assign(contact_.candidates.size(), 0.0);
   system_ = make_system_matrix(model);
+  force_roundoff_ = internal_force_roundoff(model);
   const int n = model.num_dofs();
   pcg_.resize(n);
   for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &inv_diag_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
@@ -138,10 +158,14 @@ double ImplicitIntegrator::residual(bool with_energy) {
   // The momentum scale of the residual: the largest seen in the run, so the round-off floor of G
   // (e.g. the cancellation in E = (F^T F - I)/2) stays relative to the problem's scale when the
   // motion decays.
+  // A body at rest has no momentum, and its internal forces balance gravity and the contact
+  // reactions: then the floor is the internal forces' own round-off (internal_force_roundoff),
+  // which the tolerance must not ask G to go below.
   scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
                      model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
                      dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
-                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(), 1e-300});
+                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(),
+                     dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
   const double scale = scale_;
   return g_.lpNorm<Eigen::Infinity>() / scale;
 }

@@ -34,7 +34,7 @@ enum class LinearSolverKind {
 struct ImplicitSettings {
   double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
   double xi = 0.5;                  // [0.5, 1]; 0.5 = trapezoidal force average
-  double newton_tolerance = 1e-10;  // |G|_inf <= tol * momentum scale
+  double newton_tolerance = 1e-10;  // |G|_inf <= tol * momentum scale (or dt * the internal forces' round-off)
   int max_newton_iterations = 25;
   double linear_tolerance = 1e-12;  // relative CG residual
   int max_linear_iterations = 10000;
@@ -128,6 +128,7 @@ class ImplicitIntegrator {
   std::string failure_;
   double hourglass_power0_ = 0.0;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
+  double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
   long newton_total_ = 0, linear_total_ = 0;
   long exact_contact_solves_ = 0;
   long shifted_iterations_ = 0;
