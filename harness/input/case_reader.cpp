@@ -52,6 +52,8 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
     }
   }
   m.scale = t.number("scale", 1.0, Range::positive());
+  m.rotate = t.number("rotate", 0.0, Range::closed(-360.0, 360.0));
+  m.rotate_about = t.vec2("rotate_about", Vec2::Zero());
   m.offset = t.vec2("offset", Vec2::Zero());
   t.finish();
   return m;
@@ -86,6 +88,8 @@ BodySpec read_body(const TableReader& t, int index, const std::string& default_m
   b.element = t.choice("element", "q4", {"q4", "q4_hourglass"});
   b.thickness = t.number("thickness", 1.0, Range::positive());
   b.velocity = t.vec2("velocity", Vec2::Zero());
+  b.angular_velocity = t.number("angular_velocity", 0.0, Range{});
+  if (t.has("rotation_center")) b.rotation_center = t.vec2("rotation_center", Vec2::Zero());
   const auto mat = t.table("material");
   if (!mat) t.fail("material", "missing required table [bodies.material]");
   b.material = read_material(*mat);

@@ -1,8 +1,10 @@
 #include "harness/input/case_setup.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
+#include <numbers>
 #include <utility>
 
 #include "harness/input/gmsh_reader.hpp"
@@ -26,7 +28,16 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
   } catch (const InputError& e) {
     throw InputError(c.file + ": " + m.where + ": " + e.what());
   }
+  // x' = R (s x - c) + c + offset: scaled, rotated counterclockwise about c, translated.
   mesh.nodes *= m.scale;
+  if (m.rotate != 0.0) {
+    const double a = m.rotate * std::numbers::pi / 180.0;
+    Mat2 r;
+    r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    mesh.nodes.colwise() -= m.rotate_about;
+    mesh.nodes = (r * mesh.nodes).eval();
+    mesh.nodes.colwise() += m.rotate_about;
+  }
   mesh.nodes.colwise() += m.offset;
   return mesh;
 }
@@ -173,6 +184,28 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     p.model = build_model(inputs, c.plane, c.gravity);
   } catch (const std::invalid_argument& e) {
     throw InputError(c.file + ": bodies: " + e.what());
+  }
+  // A spinning start: v = velocity + omega x (x - c) at every node of the body, c the given
+  // centre or the body's centre of mass (lumped masses), so its linear momentum stays m v.
+  for (std::size_t bi = 0; bi < c.bodies.size(); ++bi) {
+    const double omega = c.bodies[bi].angular_velocity;
+    if (omega == 0.0) continue;
+    const BodyInfo& b = p.model.bodies[bi];
+    Vec2 centre = Vec2::Zero();
+    if (c.bodies[bi].rotation_center) {
+      centre = *c.bodies[bi].rotation_center;
+    } else {
+      double mass = 0.0;
+      for (int i = b.first_node; i < b.first_node + b.num_nodes; ++i) {
+        centre += p.model.mass(2 * i) * p.model.ref.col(i);
+        mass += p.model.mass(2 * i);
+      }
+      centre /= mass;
+    }
+    for (int i = b.first_node; i < b.first_node + b.num_nodes; ++i) {
+      const Vec2 r = p.model.ref.col(i) - centre;
+      p.model.initial_velocity.segment<2>(2 * i) += omega * Vec2(-r.y(), r.x());
+    }
   }
 
   RunSettings& s = p.settings;

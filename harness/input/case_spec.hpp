@@ -39,6 +39,8 @@ struct MeshSpec {
   std::string name;
   std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile> source;
   double scale = 1.0;            // coordinates multiplied by this [-]
+  double rotate = 0.0;           // then rotated counterclockwise by this [degrees]
+  Vec2 rotate_about = Vec2::Zero();  // about this point (of the scaled mesh) [m]
   Vec2 offset = Vec2::Zero();    // then translated by this [m]
   std::string where;             // key path for error messages, e.g. "meshes.M1"
 };
@@ -65,6 +67,8 @@ struct BodySpec {
   MaterialSpec material;
   double thickness = 1.0;             // [m]
   Vec2 velocity = Vec2::Zero();       // [m/s]
+  double angular_velocity = 0.0;      // about rotation_center, counterclockwise [rad/s]
+  std::optional<Vec2> rotation_center;  // [m]; default: the body's centre of mass
   std::vector<BoxNodeSet> node_sets;
   std::string where;
 };

@@ -1,0 +1,114 @@
+// Scene set-up from a case file (harness/input/case_setup.cpp): mesh transforms and initial
+// velocity fields, checked on the prepared model.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "harness/input/case_setup.hpp"
+
+namespace fs = std::filesystem;
+using namespace ricochet;
+
+namespace {
+
+const std::string kRect = R"(name = "rect"
+mesh = "m"
+[meshes.m]
+generator = "rectangle"
+width = 0.2
+height = 0.1
+nx = 4
+ny = 2
+[[bodies]]
+name = "b"
+velocity = [1.0, -2.0]
+[bodies.material]
+young = 1e6
+poisson = 0.3
+density = 1000.0
+[time]
+end = 1e-4
+dt = 1e-5
+[output]
+interval = 1e-5
+)";
+
+PreparedCase prepare(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  const fs::path file = fs::temp_directory_path() / ("ricochet_case_setup_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(file) << text;
+  PreparedCase pc = prepare_case(read_case(file.string(), overrides));
+  fs::remove(file);
+  return pc;
+}
+
+}  // namespace
+
+// x' = R(theta) (s x - c) + c + offset, counterclockwise in degrees; rotate = 0 is no transform.
+TEST(CaseSetup, GeneratedMeshesRotateAboutAPoint) {
+  const PreparedCase plain = prepare(kRect);
+  const PreparedCase turned = prepare(kRect, {"meshes.m.rotate=90", "meshes.m.rotate_about=[0.1, 0.0]",
+                                              "meshes.m.offset=[1.0, 0.0]", "meshes.m.scale=2.0"});
+  const PreparedCase zero = prepare(kRect, {"meshes.m.rotate=0", "meshes.m.rotate_about=[5.0, 5.0]"});
+  ASSERT_EQ(plain.model.num_nodes(), turned.model.num_nodes());
+  const Vec2 c(0.1, 0.0), o(1.0, 0.0);
+  for (int i = 0; i < plain.model.num_nodes(); ++i) {
+    const Vec2 x = 2.0 * plain.model.ref.col(i);
+    const Vec2 expected = Vec2(-(x - c).y(), (x - c).x()) + c + o;
+    EXPECT_NEAR((turned.model.ref.col(i) - expected).norm(), 0.0, 1e-15) << "node " << i;
+  }
+  EXPECT_EQ(0, std::memcmp(plain.model.ref.data(), zero.model.ref.data(), sizeof(double) * plain.model.ref.size()));
+  // A rotation keeps every cell's area, so the mass (scaled by 2^2) is the same.
+  EXPECT_NEAR(turned.model.mass.sum(), 4.0 * plain.model.mass.sum(), 1e-12 * plain.model.mass.sum());
+  // A tilted rectangle's critical step is that of the plain one scaled by 2.
+  EXPECT_NEAR(turned.model.critical_dt, 2.0 * plain.model.critical_dt, 1e-12 * plain.model.critical_dt);
+}
+
+// angular_velocity spins a body about its centre of mass (or rotation_center): linear momentum
+// stays m v, the angular momentum about the centre of mass is omega sum m |r|^2.
+TEST(CaseSetup, BodiesStartSpinning) {
+  const double omega = 30.0;
+  const PreparedCase still = prepare(kRect);
+  const PreparedCase spin = prepare(kRect, {"bodies[0].angular_velocity=30.0"});
+  const Model& m = spin.model;
+  Vec2 centre = Vec2::Zero(), p = Vec2::Zero();
+  double mass = 0.0;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    centre += m.mass(2 * i) * m.ref.col(i);
+    mass += m.mass(2 * i);
+    p += m.mass(2 * i) * m.initial_velocity.segment<2>(2 * i);
+  }
+  centre /= mass;
+  EXPECT_NEAR((p - mass * Vec2(1.0, -2.0)).norm(), 0.0, 1e-12 * mass);
+  double l = 0.0, inertia = 0.0;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const Vec2 r = m.ref.col(i) - centre, v = m.initial_velocity.segment<2>(2 * i);
+    l += m.mass(2 * i) * (r.x() * v.y() - r.y() * v.x());
+    inertia += m.mass(2 * i) * r.squaredNorm();
+  }
+  EXPECT_NEAR(l, omega * inertia, 1e-12 * omega * inertia);
+  EXPECT_GT(inertia, 0.0);
+  // About a given point: v = v0 + omega x (x - c).
+  const PreparedCase about = prepare(kRect, {"bodies[0].angular_velocity=30.0", "bodies[0].rotation_center=[0.0, 0.0]"});
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const Vec2 x = about.model.ref.col(i);
+    const Vec2 expected = Vec2(1.0, -2.0) + omega * Vec2(-x.y(), x.x());
+    EXPECT_NEAR((about.model.initial_velocity.segment<2>(2 * i) - expected).norm(), 0.0, 1e-13) << "node " << i;
+  }
+  // Without the key nothing changes.
+  for (int i = 0; i < m.num_nodes(); ++i)
+    EXPECT_EQ(still.model.initial_velocity.segment<2>(2 * i), Vec2(1.0, -2.0));
+  // A free spinning body keeps its angular momentum (the run's own history column).
+  const RunResult r = run_case(spin);
+  ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+  const std::size_t col = r.history.column("angular_momentum");
+  EXPECT_NEAR(r.history.at(0, col), omega * inertia, 1e-9 * omega * inertia);
+  EXPECT_NEAR(r.history.at(r.history.rows() - 1, col), omega * inertia, 1e-6 * omega * inertia);
+}
