@@ -132,6 +132,17 @@ BoundarySpec read_boundary(const TableReader& t, const std::string& first_body) 
   return b;
 }
 
+InitialVelocitySpec read_initial_velocity(const TableReader& t, const std::string& first_body) {
+  InitialVelocitySpec v;
+  v.where = t.path();
+  v.body = t.text("body", first_body);
+  v.nodes = t.text("nodes");
+  v.velocity = t.vec2("velocity", Vec2::Zero());
+  if (!t.has("velocity")) t.fail("velocity", "missing required key: the nodes' initial velocity [x, y] in m/s");
+  t.finish();
+  return v;
+}
+
 ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
   ProbeSpec p;
   p.where = t.path();
@@ -268,6 +279,8 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   const std::string first_body = c.bodies.front().name;
   for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
+  for (const auto& t : root.tables("initial_velocity"))
+    c.initial_velocities.push_back(read_initial_velocity(t, first_body));
 
   const auto obstacles = root.tables("obstacles");
   for (std::size_t i = 0; i < obstacles.size(); ++i) {

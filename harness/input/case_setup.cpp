@@ -207,6 +207,13 @@ PreparedCase prepare_case(const CaseSpec& spec) {
       p.model.initial_velocity.segment<2>(2 * i) += omega * Vec2(-r.y(), r.x());
     }
   }
+  // [[initial_velocity]]: a node set's own velocity, in file order (a later one wins).
+  for (const InitialVelocitySpec& iv : c.initial_velocities) {
+    const int bi = body_index(c, iv.body, iv.where, "body");
+    const int node0 = p.model.bodies[bi].first_node;
+    for (int local : node_set(c, p.meshes[bi], iv.nodes, iv.where, "nodes"))
+      p.model.initial_velocity.segment<2>(2 * (node0 + local)) = iv.velocity;
+  }
 
   RunSettings& s = p.settings;
   s.end_time = c.end_time;

@@ -82,6 +82,14 @@ struct BoundarySpec {
   std::string where;
 };
 
+// [[initial_velocity]]: the initial velocity of one node set, replacing the body's.
+struct InitialVelocitySpec {
+  std::string body;
+  std::string nodes;  // node set of that body
+  Vec2 velocity = Vec2::Zero();  // [m/s]
+  std::string where;
+};
+
 struct ProbeSpec {
   std::string name;
   std::string body;
@@ -123,6 +131,7 @@ struct CaseSpec {
   std::string default_mesh;  // top-level `mesh`
   std::vector<BodySpec> bodies;
   std::vector<BoundarySpec> boundaries;
+  std::vector<InitialVelocitySpec> initial_velocities;
   std::vector<ObstacleSpec> obstacles;
   std::vector<ContactPairSpec> contact_pairs;
   ContactSettings contact;
