@@ -145,3 +145,17 @@ velocity = [0.0, 3.0]
   EXPECT_THROW(prepare(kRect + "[[initial_velocity]]\nnodes = \"nowhere\"\nvelocity = [1.0, 0.0]\n"), InputError);
   EXPECT_THROW(prepare(kRect + "[[initial_velocity]]\nnodes = \"top\"\n"), InputError);
 }
+
+// output.field_interval: a snapshot at t = 0, interval, 2 interval ... up to the end, merged with
+// the listed times; too many snapshots is an input error.
+TEST(CaseSetup, FieldIntervalAddsEvenlySpacedSnapshots) {
+  const PreparedCase pc = prepare(kRect, {"output.field_interval=2e-5", "output.fields=[3e-5, 4e-5]"});
+  const RunResult r = run_case(pc);
+  ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+  std::vector<double> times;
+  for (const FieldSnapshot& f : r.fields) times.push_back(f.time);
+  const std::vector<double> expected = {0.0, 2e-5, 3e-5, 4e-5, 6e-5, 8e-5, 1e-4};
+  ASSERT_EQ(times.size(), expected.size());
+  for (std::size_t k = 0; k < times.size(); ++k) EXPECT_NEAR(times[k], expected[k], 1e-15) << k;
+  EXPECT_THROW(prepare(kRect, {"output.field_interval=1e-9"}), InputError);
+}

@@ -371,6 +371,15 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   if (const auto out = root.table("output")) {
     c.sample_interval = out->number("interval", c.sample_interval, Range::non_negative());
     c.field_times = out->numbers("fields", Range::non_negative());  // times after the end are skipped
+    // field_interval: a snapshot every interval from t = 0 to the end, besides `fields` (the
+    // run stores the snapshots until it writes them, so their number is bounded).
+    if (const double every = out->number("field_interval", 0.0, Range::non_negative()); every > 0.0) {
+      constexpr double kMaxSnapshots = 10'000;
+      if (c.end_time / every > kMaxSnapshots)
+        out->fail("field_interval", "gives " + std::to_string(static_cast<long>(c.end_time / every)) +
+                                        " snapshots over time.end; at most 10000 (a larger interval)");
+      for (long k = 0; k * every <= c.end_time * (1.0 + 1e-12); ++k) c.field_times.push_back(k * every);
+    }
     const std::string measure = out->choice("stress_measure", "cauchy", {"cauchy", "pk2", "kirchhoff"});
     c.stress_measure = measure == "pk2"         ? StressMeasure::pk2
                        : measure == "kirchhoff" ? StressMeasure::kirchhoff
