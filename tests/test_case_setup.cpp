@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -158,4 +159,23 @@ TEST(CaseSetup, FieldIntervalAddsEvenlySpacedSnapshots) {
   ASSERT_EQ(times.size(), expected.size());
   for (std::size_t k = 0; k < times.size(); ++k) EXPECT_NEAR(times[k], expected[k], 1e-15) << k;
   EXPECT_THROW(prepare(kRect, {"output.field_interval=1e-9"}), InputError);
+}
+
+// A diverged run ends with a snapshot of the state it stopped in (finite values only), so that
+// there is something to inspect; without field times it is the only one.
+TEST(CaseSetup, DivergedRunKeepsItsLastState) {
+  // The top edge starts moving against the rest (a deforming body), far above the stable
+  // step (about 13 x): the explicit run blows up within a few steps.
+  const PreparedCase pc = prepare(kRect + "[[initial_velocity]]\nnodes = \"top\"\nvelocity = [3.0, 0.0]\n",
+                                  {"time.dt=1e-2", "time.end=1.0"});
+  const RunResult r = run_case(pc);
+  ASSERT_EQ(r.status, RunStatus::diverged);
+  ASSERT_EQ(r.fields.size(), 1u) << r.reason;
+  const FieldSnapshot& f = r.fields.back();
+  EXPECT_EQ(f.step, r.diverged_step);
+  EXPECT_EQ(f.time, r.diverged_time);
+  EXPECT_TRUE(f.u.allFinite());
+  EXPECT_TRUE(f.v.allFinite());
+  ASSERT_EQ(f.von_mises.size(), static_cast<std::size_t>(pc.model.num_cells()));
+  EXPECT_GT(*std::max_element(f.von_mises.begin(), f.von_mises.end()), 0.0);
 }

@@ -246,6 +246,23 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   result_.reason = std::move(reason);
   result_.diverged_step = s.step;
   result_.diverged_time = s.time;
+  // The state it diverged in, as one more field snapshot (written like the others), so that it
+  // can be inspected; unless this step already has one, or the state is not finite (the VTU
+  // files hold finite values only: docs/outputs.md).
+  if (result_.fields.empty() || result_.fields.back().step != s.step) {
+    FieldSnapshot f;
+    f.step = s.step;
+    f.time = s.time;
+    f.u = s.u;
+    f.v.resize(s.u.size());
+    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+    f.von_mises.assign(model_.num_cells(), 0.0);
+    if (f.u.allFinite() && f.v.allFinite()) {
+      cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
+      if (std::all_of(f.von_mises.begin(), f.von_mises.end(), [](double x) { return std::isfinite(x); }))
+        result_.fields.push_back(std::move(f));
+    }
+  }
 }
 
 bool RunMonitor::observe(const State& s, double kinetic0) {
