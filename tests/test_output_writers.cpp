@@ -385,6 +385,10 @@ TEST(PvdWriter, ExactOutputAndChecks) {
             "</VTKFile>\n");
   EXPECT_EQ(xml_error(pvd), "");
   EXPECT_EQ(xml_error(format_pvd({})), "");
+  // A step's time n dt is labelled as written, not with its last-bit noise.
+  const double t = 300 * 1e-5;  // 0.0030000000000000005
+  EXPECT_NE(format_pvd({{t, "a.vtu"}}).find("timestep=\"0.003\""), std::string::npos);
+  EXPECT_NE(format_pvd({{2.5e-7 * 12345, "a.vtu"}}).find("timestep=\"0.00308625\""), std::string::npos);
   EXPECT_THROW(format_pvd({{nan_value, "a.vtu"}}), std::invalid_argument);
   EXPECT_THROW(format_pvd({{0.0, ""}}), std::invalid_argument);
 }

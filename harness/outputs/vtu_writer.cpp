@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <set>
 #include <stdexcept>
 #include <string_view>
@@ -231,8 +232,13 @@ std::string format_pvd(const std::vector<std::pair<double, std::string>>& time_a
         throw std::invalid_argument("format_pvd: file name contains a control character");
       }
     }
+    // 15 significant digits: a step's time n dt prints as the user wrote it (300 x 1e-5 is
+    // 0.0030000000000000005 in full), and distinct steps still print distinct. The VTU file
+    // itself keeps the exact time (TimeValue).
+    char label[32];
+    std::snprintf(label, sizeof label, "%.15g", time);
     out += "    <DataSet timestep=\"";
-    append_number(out, time);
+    out += label;
     out += "\" group=\"\" part=\"0\" file=\"" + xml_attribute(file) + "\"/>\n";
   }
   out += "  </Collection>\n</VTKFile>\n";
