@@ -216,8 +216,9 @@ template <bool kViscous, class Pass, class Mat, class Out>
 // triangle, the plain sum for its third row; sum_I gamma_I a_I is summed pairwise,
 // (a_0 g_0 + a_2 g_2) + (a_1 g_1 + a_3 g_3). e0 is a multiple of kLanes (the threaded pass's
 // chunks are); a last partial batch computes its padding lanes and drops them.
-// The pass provides, besides element_kernel's contract (with point() taking one more argument,
-// `may`):
+// The pass provides element_kernel's contract without response() and hourglass() (the kernel
+// evaluates the law with first_piola_lanes and passes P as Pass::Response{P}), with point()
+// taking one more argument, `may`, and:
 //   kPerPoint                          whether point(), begin_element() and end_element() do
 //                                      anything
 //   screen(mat, F, P, det, may)        on all lanes of a point: may[l] = 1.0 where point()

@@ -14,8 +14,9 @@
 namespace ricochet {
 namespace {
 
-// The force pass (element_kernels.hpp): P = first_piola(F) at each point and, with kStress
-// (0 = no stresses, else 1 + the measure, so that each measure's kernel is its own), the von
+// The force pass, run by force_kernel() (element_kernels.hpp), which evaluates P at each point
+// on lanes; with kStress (0 = no stresses, else 1 + the measure, so that each measure's kernel
+// is its own), the von
 // Mises peak of each cell over its points above the threshold. With kSample (a history sample
 // or a field snapshot: StressTracking::samples()) every point's equivalents are exact and the
 // pass also fills sampled_max and cell_von_mises, with the arithmetic of von_mises_maxima()
@@ -41,13 +42,9 @@ struct ForcePass {
         contact_cell(tracking ? tracking->contact_cell : nullptr),
         cell_von_mises(tracking ? tracking->cell_von_mises : nullptr) {}
 
-  struct Response {
+  struct Response {  // the point's P, from the kernel's first_piola_lanes
     Mat2 P;
   };
-  template <class Mat>
-  EIGEN_ALWAYS_INLINE Response response(const Mat& mat, const Mat2& F) const {
-    return {mat.first_piola(F)};
-  }
   void begin_element() {
     if constexpr (kStress) vm2 = VonMisesRatio{};
     if constexpr (kSample) cell_max = 0.0;
@@ -82,8 +79,6 @@ struct ForcePass {
     else if (ratio_greater(x, vm2))
       vm2 = x;
   }
-  template <class Gamma>
-  void hourglass(const Gamma&, double, bool) {}
   template <int kPoints>
   void end_element(std::size_t, int cell) {
     if constexpr (kStress && kPoints > 1) {
