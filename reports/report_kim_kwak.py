@@ -245,6 +245,43 @@ def fig_histories(outdir, stem, runs):
     return F.save(fig, outdir, stem)
 
 
+def interfaces(h):
+    """The contact interfaces of a history (docs/outputs.md): the names N with the columns
+    N_normal_force and N_contact_nodes, in column order."""
+    names = list(h.dtype.names) if hasattr(h, "dtype") else list(h.keys())
+    return [c[:-len("_normal_force")] for c in names
+            if c.endswith("_normal_force") and c != "normal_force"
+            and c[:-len("_normal_force")] + "_contact_nodes" in names]
+
+
+def fig_interfaces(outdir, stem, runs, names):
+    """One panel per contact interface: its normal force (N) against time, one line per run."""
+    plt = F.plt
+    n = len(names)
+    fig, axes = plt.subplots(1, n, figsize=(4.0 * n + 0.6, 4.0), squeeze=False)
+    axes = axes.ravel()
+    styles = F._styles(runs)
+    tend = 0.0
+    for (label, r), st in zip(runs, styles):
+        h = r.history()
+        t = F.ms(h["time"])
+        tend = max(tend, float(t[-1]))
+        for ax, name in zip(axes, names):
+            col = name + "_normal_force"
+            if col in h:
+                ax.plot(t, h[col], lw=1.1, label=label, **st)
+    for ax, name in zip(axes, names):
+        ax.set_title(f"{name} ({name}_normal_force)")
+        ax.set_xlabel("time t (ms)")
+        ax.set_xlim(0, tend)
+    axes[0].set_ylabel("normal force Σ r_n (N)")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3,
+               frameon=False)
+    fig.tight_layout()
+    return F.save(fig, outdir, stem)
+
+
 # ---------------------------------------------------------------------------------------------
 # Sections
 
@@ -266,6 +303,7 @@ def sections(ctx, Section):
         "gate result is under the runs table.")
     builders = (("kk_shapes", "Deformed shapes of the ball and the block", sec_shapes),
                 ("kk_histories", "Energy error and ball velocity per run", sec_histories),
+                ("kk_interfaces", "Contact forces per interface", sec_interfaces),
                 ("kk_runs", "The Kim–Kwak-type runs", sec_runs))
     out = []
     for sid, title, fn in builders:
@@ -365,15 +403,21 @@ def _show(p):
     return os.path.relpath(p, REPO) if p.startswith(REPO + os.sep) else p
 
 
+def _ok_runs(kk, column=None):
+    """(the case's runs, [(label, run)] of those ok with a history (holding `column`))."""
+    runs = kk_runs(kk)
+    labels = RV.column_labels(runs)
+    ok = [(labels[r.id], r) for r in runs if r.ok and r.history() is not None
+          and (column is None or column in r.history())]
+    return runs, ok
+
+
 def sec_histories(ctx, Section, sid, title):
     s = Section(sid, title, "figure")
     kk = ctx.get("kk")
     if kk is None:
         return _no_sweep(ctx, s)
-    runs = kk_runs(kk)
-    labels = RV.column_labels(runs)
-    ok = [(labels[r.id], r) for r in runs
-          if r.ok and r.history() is not None and "energy_error" in r.history()]
+    runs, ok = _ok_runs(kk, "energy_error")
     if not ok:
         s.available = False
         s.missing = (f"no ok run of case `{CASE}` with a history in {kk.dir}. Run `{KK_CMD}`.")
@@ -400,6 +444,47 @@ def sec_histories(ctx, Section, sid, title):
         + "; ".join(parts) + "."
         + (f" Not drawn (not ok or no history): {', '.join(f'`{i}`' for i in left)}."
            if left else "")
+        + f" Runs (sweep `{kk.dir}`): " + "; ".join(f"{lab}: `{r.id}`" for lab, r in ok) + ".")
+    return s
+
+
+def sec_interfaces(ctx, Section, sid, title):
+    s = Section(sid, title, "figure")
+    kk = ctx.get("kk")
+    if kk is None:
+        return _no_sweep(ctx, s)
+    _, ok = _ok_runs(kk)
+    names = []
+    for _, r in ok:
+        names += [n for n in interfaces(r.history()) if n not in names]
+    if not names:
+        s.available = False
+        s.missing = (f"no run of case `{CASE}` in {kk.dir} has per-interface history columns "
+                     f"(`<name>_normal_force`, docs/outputs.md). Run `{KK_CMD}`.")
+        return s
+    s.files = fig_interfaces(ctx["out"], "kim_kwak_interfaces", ok, names)
+    s.runs = [r.id for _, r in ok]
+    s.sources = [kk.dir]
+    parts = []
+    for lab, r in ok:
+        h = r.history()
+        peaks = []
+        for n in names:
+            if n + "_normal_force" not in h:
+                continue
+            f, c = h[n + "_normal_force"], h[n + "_contact_nodes"]
+            on = np.nonzero(c > 0)[0]
+            first = f"{1e3 * float(h['time'][on[0]]):.2f} ms" if len(on) else "never"
+            peaks.append(f"{n} {fmt_g(float(np.max(f)))} N (from {first})")
+        parts.append(f"{lab}: " + ", ".join(peaks))
+    s.caption = (
+        "The normal contact force of each interface against time: each rigid obstacle and "
+        "each contact pair has its own history columns (`<name>_normal_force`, "
+        "`_tangential_force`, `_contact_nodes`, `_contact_work`, `_friction_dissipation`; "
+        "docs/outputs.md), which add up to the summed columns. The groove carries the block "
+        "(and, once it lands, the ball), the ball–block pair acts from the strike on, the bump "
+        "when the block reaches it. Colour = scheme; a second run of one scheme is dashed. "
+        "Peak force and first contact per run: " + "; ".join(parts) + "."
         + f" Runs (sweep `{kk.dir}`): " + "; ".join(f"{lab}: `{r.id}`" for lab, r in ok) + ".")
     return s
 

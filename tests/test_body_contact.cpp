@@ -212,7 +212,7 @@ struct HeadOn {
     settings.dt = 0.9 * model.critical_dt;
     settings.end_time = 1.2e-4;
     settings.monitor_every = 1;
-    settings.body_pairs = {{0, 1, mu}};
+    settings.body_pairs = {{0, 1, mu, "pair"}};
   }
 };
 
@@ -253,7 +253,7 @@ TEST(BodyContact, ObliqueFrictionalImpactConservesMomentum) {
     s.dt = scheme == Scheme::implicit ? 1e-6 : 0.9 * model.critical_dt;
     s.end_time = 2e-4;
     s.monitor_every = 1;
-    s.body_pairs = {{0, 1, 0.3}};
+    s.body_pairs = {{0, 1, 0.3, "pair"}};
     const RunResult r = run(model, s, scheme);
     ASSERT_EQ(r.status, RunStatus::ok) << name(scheme) << ": " << r.reason;
     const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y");
@@ -280,7 +280,7 @@ TEST(BodyContact, BlockSlidingOnADeformableFloorDeceleratesAtMuG) {
   s.dt = 0.9 * model.critical_dt;
   s.end_time = 0.15;
   s.sample_interval = 1e-3;
-  s.body_pairs = {{0, 1, mu}};
+  s.body_pairs = {{0, 1, mu, "pair"}};
   const int floor0 = model.bodies[1].first_node;
   for (int i = 0; i <= 60; ++i)  // the floor's bottom row
     for (int k = 0; k < 2; ++k) s.prescribed.push_back({2 * (floor0 + i) + k, PrescribedDof::Kind::velocity, 0.0, 0.0});
@@ -437,7 +437,7 @@ TEST(BodyContact, ImplicitUnconvergedContactIsCountedNotFatal) {
   for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
     SCOPED_TRACE(solver == LinearSolverKind::pcg ? "pcg" : "direct");
     HeadOn h(0.2, {1.0, -0.3});
-    h.settings.body_pairs.push_back({1, 0, 0.2});
+    h.settings.body_pairs.push_back({1, 0, 0.2, "reverse"});
     h.settings.dt = 1e-7;
     h.settings.end_time = 6e-5;
     h.settings.contact.max_sweeps = 2;

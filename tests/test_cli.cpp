@@ -239,6 +239,27 @@ TEST_F(CliTest, RejectsInitialPenetration) {
   expect_rejected(pair, "", {"body \"b\" node 9 at (0.1, 0.025) starts inside body \"c\" of a contact pair, 0.005 m deep"});
 }
 
+TEST_F(CliTest, InterfaceNamesNameHistoryColumns) {
+  // Obstacles and contact pairs name their history columns (<name>_normal_force, ...): one
+  // name each, of letters, digits and '_'.
+  const std::string contact = "scheme = \"semi_explicit\"\n" + kGood;
+  const std::string floor = "[[obstacles]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n";
+  const std::string wall = "[[obstacles]]\nname = \"floor\"\npoint = [-0.01, 0.0]\nnormal = [1.0, 0.0]\n";
+  expect_rejected(contact + floor + wall, "", {"obstacles[1].name", "\"floor\" already names another obstacle"});
+  expect_rejected(contact + replace(floor, "\"floor\"", "\"the floor\""), "",
+                  {"obstacles[0].name", "letters, digits and '_'"});
+  // The history has the obstacle's columns beside the summed ones.
+  const Outcome o = run("run " + write("case.toml", contact + floor) + " --out " + out() + " --quiet");
+  ASSERT_EQ(o.status, 0) << o.output;
+  std::ifstream in(out() + "/history.csv");
+  std::string header;
+  std::getline(in, header);
+  for (const char* c : {",normal_force,", ",floor_normal_force,", ",floor_tangential_force,", ",floor_contact_nodes,",
+                        ",floor_contact_work,", ",floor_friction_dissipation"})
+    EXPECT_NE(header.find(c), std::string::npos) << c << " in " << header;
+  fs::remove_all(out());
+}
+
 TEST_F(CliTest, RejectsWrongType) {
   expect_rejected(replace(kGood, "young = 1e6", "young = \"stiff\""), "", {"bodies[0].material.young", "expected a number"});
 }

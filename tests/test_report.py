@@ -148,7 +148,7 @@ VER_CASES = ("bar_wall", "sliding_block")  # in the tiny sweep; the other specs 
 KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
 KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
 KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
-KK_IDS = ("kk_shapes", "kk_histories", "kk_runs")
+KK_IDS = ("kk_shapes", "kk_histories", "kk_interfaces", "kk_runs")
 
 
 # (b): a sweep written from docs/sweeps.md alone: two schemes on the oblique plate, each measured
@@ -434,7 +434,7 @@ class ReportSmoke(unittest.TestCase):
             "build/ricochet stability", "ricochet stability"))
         self.assertIn("cases/verification/sweep.toml", section_html(page, "verification"))
         self.assertIn("cases/kim_kwak/rubber_groove.toml", section_html(page, "kk_shapes"))
-        for sid in ("kk_histories", "kk_runs"):
+        for sid in ("kk_histories", "kk_interfaces", "kk_runs"):
             self.assertIn("cases/kim_kwak/sweep.toml", section_html(page, sid))
         self.assertFalse([s for s in by_id if s.startswith("ver_")])
         for sid, s in by_id.items():
@@ -491,7 +491,8 @@ class ReportSmoke(unittest.TestCase):
                           ("penetration", "penetration"),
                           *((f"ver_{c}", f"verification_{c}") for c in VER_CASES),
                           ("kk_shapes", "kim_kwak_shapes"),
-                          ("kk_histories", "kim_kwak_histories")):
+                          ("kk_histories", "kim_kwak_histories"),
+                          ("kk_interfaces", "kim_kwak_interfaces")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -504,6 +505,10 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(man["kim_kwak_fields"], os.path.abspath(self.kk_fields))
         kk_ids = [r["run_id"] for r in read_csv(os.path.join(self.kk, "summary.csv"))]
         self.assertEqual(sorted(by_id["kk_histories"]["runs"]), sorted(kk_ids))
+        self.assertEqual(sorted(by_id["kk_interfaces"]["runs"]), sorted(kk_ids))
+        cap = section_html(page, "kk_interfaces")
+        for name in ("groove", "bump", "ball_block"):
+            self.assertIn(f"{name} ", cap)
         self.assertEqual(len(kk_ids), 5)
         self.assertEqual(by_id["kk_shapes"]["runs"], [os.path.abspath(self.kk_fields)])
         cap = section_html(page, "kk_shapes")
@@ -625,9 +630,9 @@ class ReportSmoke(unittest.TestCase):
                                    "kk_fields": os.path.join(self.kk_fields, "fields")},
                                   make_report.Section)
         self.assertEqual([s.id for s in only_sweep], list(KK_IDS))
-        self.assertEqual([s.available for s in only_sweep], [False, True, True])
+        self.assertEqual([s.available for s in only_sweep], [False, True, True, True])
         self.assertIn(RK.FIELDS_CMD, only_sweep[0].missing)
-        self.assertEqual([s.available for s in only_fields], [True, False, False])
+        self.assertEqual([s.available for s in only_fields], [True, False, False, False])
         for s in only_fields[1:]:
             self.assertIn(RK.KK_CMD, s.missing)
         for s in only_sweep + only_fields:

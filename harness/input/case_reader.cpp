@@ -143,13 +143,19 @@ InitialVelocitySpec read_initial_velocity(const TableReader& t, const std::strin
   return v;
 }
 
+// A name that prefixes CSV columns (probes, contact interfaces): letters, digits and '_'.
+void check_column_name(const TableReader& t, const std::string& name) {
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
+      t.fail("name", "got \"" + name + "\"; allowed: letters, digits and '_' (it names CSV columns)");
+  if (name.empty()) t.fail("name", "must not be empty (it names CSV columns)");
+}
+
 ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
   ProbeSpec p;
   p.where = t.path();
   p.name = t.text("name");
-  for (char c : p.name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
-      t.fail("name", "got \"" + p.name + "\"; allowed: letters, digits and '_' (it names CSV columns)");
+  check_column_name(t, p.name);
   p.body = t.text("body", first_body);
   if (t.has("point")) p.point = t.vec2("point");
   p.node_set = t.text("node_set", "");
@@ -187,6 +193,7 @@ ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* ra
   ObstacleSpec o;
   o.where = t.path();
   o.name = t.text("name", "obstacle" + std::to_string(index));
+  check_column_name(t, o.name);
   const std::string type = t.choice("type", "line", {"line", "circle", "polyline"});
   std::vector<std::string> keys{"name", "type", "friction", "friction_by_body"};
   if (type == "line") {
@@ -301,6 +308,8 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     cp.master = t.text("master");
     cp.friction = t.number("friction", 0.0, Range::non_negative());
     cp.two_pass = t.boolean("two_pass", false);
+    cp.name = t.text("name", cp.slave + "_" + cp.master);
+    check_column_name(t, cp.name);
     t.finish();
     for (const char* key : {"slave", "master"}) {
       const std::string& name = std::string(key) == "slave" ? cp.slave : cp.master;
@@ -310,6 +319,17 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
     }
     if (cp.slave == cp.master) t.fail("master", "must differ from slave (self-contact is not treated)");
     c.contact_pairs.push_back(std::move(cp));
+  }
+  // Interface names (obstacles and pairs) name history columns: one each.
+  {
+    std::vector<std::string> seen;
+    auto check = [&](const TableReader& t, const std::string& name) {
+      if (std::find(seen.begin(), seen.end(), name) != seen.end())
+        t.fail("name", "\"" + name + "\" already names another obstacle or contact pair (each names its history columns)");
+      seen.push_back(name);
+    };
+    for (std::size_t i = 0; i < obstacles.size(); ++i) check(obstacles[i], c.obstacles[i].name);
+    for (std::size_t i = 0; i < pairs.size(); ++i) check(pairs[i], c.contact_pairs[i].name);
   }
   if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == Scheme::plain_explicit)
     root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] or [[contact_pairs]] need "

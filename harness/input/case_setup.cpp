@@ -252,8 +252,8 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     }
   for (const ContactPairSpec& cp : c.contact_pairs) {
     const int slave = body_index(c, cp.slave, cp.where, "slave"), master = body_index(c, cp.master, cp.where, "master");
-    s.body_pairs.push_back({slave, master, cp.friction});
-    if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction});
+    s.body_pairs.push_back({slave, master, cp.friction, cp.name});
+    if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction, cp.name});
   }
   check_initial_penetration(c, p.model, s);
   s.contact = c.contact;

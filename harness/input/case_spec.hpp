@@ -114,6 +114,7 @@ struct ContactPairSpec {
   std::string master;      // body whose boundary segments they are checked against
   double friction = 0.0;   // mu [-]
   bool two_pass = false;   // also the master's nodes against the slave's segments
+  std::string name;        // the interface's name (history columns); default "<slave>_<master>"
   std::string where;
 };
 

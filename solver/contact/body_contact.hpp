@@ -40,6 +40,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "solver/model/model.hpp"
@@ -50,6 +51,7 @@ struct BodyPair {
   int slave = 0;          // body whose boundary nodes are checked
   int master = 1;         // body whose boundary segments they are checked against
   double friction = 0.0;  // mu of the pair [-]
+  std::string name;       // its interface (contact_set.hpp); pairs of one name are one interface
 };
 
 struct SurfaceSegment {

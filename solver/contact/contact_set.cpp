@@ -5,6 +5,18 @@
 
 namespace ricochet {
 
+std::vector<std::string> contact_interface_names(const std::vector<Obstacle>& obstacles,
+                                                 const std::vector<BodyPair>& pairs) {
+  std::vector<std::string> names;
+  for (const Obstacle& o : obstacles) names.push_back(o.name);
+  for (std::size_t q = 0; q < pairs.size(); ++q) {
+    const std::string name = pairs[q].name.empty() ? "pair" + std::to_string(q) : pairs[q].name;
+    if (std::find(names.begin() + static_cast<long>(obstacles.size()), names.end(), name) == names.end())
+      names.push_back(name);
+  }
+  return names;
+}
+
 ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obstacles,
                             const std::vector<std::vector<double>>& friction,
                             const std::vector<PrescribedDof>& prescribed, const std::vector<BodyPair>& pairs) {
@@ -28,6 +40,21 @@ ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obs
         c.any_friction = c.any_friction || bp.friction > 0.0;
       }
   }
+  // Interfaces: obstacle o is interface o; pair q the interface of its name.
+  const std::vector<std::string> names = contact_interface_names(obstacles, pairs);
+  c.interface.reserve(c.candidates.size());
+  for (const ContactCandidate& cc : c.candidates) {
+    if (cc.pair < 0) {
+      c.interface.push_back(cc.obstacle);
+      continue;
+    }
+    const std::string& pn = pairs[cc.pair].name;
+    const std::string name = pn.empty() ? "pair" + std::to_string(cc.pair) : pn;
+    c.interface.push_back(static_cast<int>(
+        std::find(names.begin() + static_cast<long>(obstacles.size()), names.end(), name) - names.begin()));
+  }
+  c.interface_last.assign(names.size(), {});
+  c.interface_total.assign(names.size(), {});
   c.boxes.resize(pairs.size());
   const std::size_t n = c.candidates.size();
   c.reaction.assign(n, {});

@@ -91,9 +91,28 @@ struct ContactTotals {
   long status_changes = 0;            // sum of ContactStep::status_changes
 };
 
+// An interface: one rigid obstacle, or one contact pair (both passes of a two-pass pair are
+// one interface). Its share of ContactStep and ContactTotals, for the history's per-interface
+// columns (docs/outputs.md).
+struct InterfaceStep {
+  int active = 0;                  // contacts with a reaction this step
+  double normal_force = 0.0;       // sum r_n [N]
+  double tangential_force = 0.0;   // sum r_t along each contact's tangent [N]
+};
+struct InterfaceTotals {
+  double contact_work = 0.0;          // [J]
+  double friction_dissipation = 0.0;  // [J]
+};
+
+// The interfaces in order: the obstacles, then the body pairs by name (pairs with the same
+// name are one interface; an unnamed pair is one of its own, named "pair<q>").
+std::vector<std::string> contact_interface_names(const std::vector<Obstacle>& obstacles,
+                                                 const std::vector<BodyPair>& pairs);
+
 // The candidates, their per-step geometry and reactions, and the observables.
 struct ContactSet {
   std::vector<ContactCandidate> candidates;
+  std::vector<int> interface;  // per candidate, its index in contact_interface_names()
   bool any_friction = false;
   // Contact between bodies (body_contact.hpp): per pair the master's surface and, per step, its
   // bounding box.
@@ -111,6 +130,8 @@ struct ContactSet {
 
   ContactStep last;
   ContactTotals total;
+  std::vector<InterfaceStep> interface_last;     // per interface, of the last step
+  std::vector<InterfaceTotals> interface_total;  // per interface, over the run
 };
 
 // Candidates: the boundary nodes of each body paired with each obstacle, then the boundary
@@ -165,6 +186,7 @@ bool candidate_frame(const Model& model, const std::vector<Obstacle>& obstacles,
 inline void begin_step(ContactSet& c) {
   c.active.clear();
   c.last = ContactStep{};
+  for (InterfaceStep& i : c.interface_last) i = InterfaceStep{};
 }
 
 // The step's verdict on candidate k: its status (open, stick, slip) with its final reaction in
@@ -178,6 +200,16 @@ inline void record(ContactSet& c, int k, ContactStatus status) {
   c.last.slip += status == ContactStatus::slip;
   c.last.normal_force += c.reaction[k].n;
   c.last.tangential_force += c.reaction[k].t;
+  InterfaceStep& i = c.interface_last[c.interface[k]];
+  ++i.active;
+  i.normal_force += c.reaction[k].n;
+  i.tangential_force += c.reaction[k].t;
+}
+
+// Slip work of candidate k added to the friction dissipation (the run's and its interface's).
+inline void add_dissipation(ContactSet& c, int k, double work) {
+  c.total.friction_dissipation += work;
+  c.interface_total[c.interface[k]].friction_dissipation += work;
 }
 
 // Work of active contact k's reaction F = r_n n + r_t t over the step: scale * sum_j coef_j F .
@@ -201,9 +233,10 @@ void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_moti
     work += (st.coef[j] * force).dot(d);
     work_normal += st.coef[j] * r.n * n.dot(d);
   }
-  if (slip) c.total.friction_dissipation -= r.t * scale * t.dot(relative);
+  if (slip) add_dissipation(c, k, -r.t * scale * t.dot(relative));
   c.total.contact_work += scale * work;
   c.total.contact_work_normal += scale * work_normal;
+  c.interface_total[c.interface[k]].contact_work += scale * work;
 }
 
 // End of a step: the active count and the run totals. `iterations` and `converged` describe the

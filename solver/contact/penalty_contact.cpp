@@ -178,7 +178,7 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
         if (fn > 0.0) status = ContactStatus::stick;
       } else {
         ft = std::copysign(cap, trial);
-        c.total.friction_dissipation += (trial - ft) * (old + ft) / (2.0 * stiff);
+        add_dissipation(c, k, (trial - ft) * (old + ft) / (2.0 * stiff));
       }
     }
     c.reaction[k] = {fn, ft};

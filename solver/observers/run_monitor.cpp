@@ -141,6 +141,10 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   fn("contact_status_changes", of([](const X& h) { return static_cast<double>(h.c.status_changes); }));
 }
 
+// Per interface (contact_interface_names()), after the columns above: <name> + each suffix.
+constexpr const char* kInterfaceColumns[] = {"_normal_force", "_tangential_force", "_contact_nodes",
+                                             "_contact_work", "_friction_dissipation"};
+
 }  // namespace
 
 std::size_t History::column(const std::string& name) const {
@@ -149,9 +153,12 @@ std::size_t History::column(const std::string& name) const {
   return static_cast<std::size_t>(it - columns.begin());
 }
 
-std::vector<std::string> history_columns(const std::vector<Probe>& probes) {
+std::vector<std::string> history_columns(const std::vector<Probe>& probes,
+                                         const std::vector<std::string>& interfaces) {
   std::vector<std::string> c;
   history_fields(nullptr, [&c](const char* name, double) { c.emplace_back(name); });
+  for (const std::string& i : interfaces)
+    for (const char* s : kInterfaceColumns) c.push_back(i + s);
   for (const auto& p : probes)
     for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
   return c;
@@ -171,7 +178,10 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   }
   std::sort(field_steps_.begin(), field_steps_.end());
   field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
-  result.history.columns = history_columns(settings.probes);
+  result.history.columns =
+      history_columns(settings.probes, contact.candidates.empty()
+                                           ? std::vector<std::string>{}
+                                           : contact_interface_names(settings.obstacles, settings.body_pairs));
   result.history.values.reserve(samples_.size() * result.history.columns.size());
   result.fields.reserve(field_steps_.size());
   if (!field_steps_.empty()) field_cells_.assign(model.num_cells(), 0.0);
@@ -302,6 +312,13 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     auto& v = result_.history.values;
     const HistoryInputs row{s, e, c, contact_.total, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
     history_fields(&row, [&v](const char*, double value) { v.push_back(value); });
+    if (!contact_.candidates.empty())
+      for (std::size_t i = 0; i < contact_.interface_last.size(); ++i) {
+        const InterfaceStep& is = contact_.interface_last[i];
+        const InterfaceTotals& it = contact_.interface_total[i];
+        v.insert(v.end(), {is.normal_force, is.tangential_force, static_cast<double>(is.active),
+                           it.contact_work, it.friction_dissipation});
+      }
     for (const auto& pr : settings_.probes) {
       const int d = 2 * pr.node;
       v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});

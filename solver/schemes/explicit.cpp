@@ -32,27 +32,36 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   RunMonitor monitor(model, settings, result, contact);
   const long planned = monitor.planned_steps();
 
+  // What a history row at t_n holds (docs/outputs.md, History semantics). The bi-potential
+  // reactions of step n -> n+1 are the reactions at t_{n+1} (Cros et al. 2010, Eq. (4): the
+  // contact conditions hold at t+dt): the row at t_n is observed before they are solved, so it
+  // holds u_n, v_n = v_{n-1/2} + dt/2 a_n of the free accelerations, and the contact results up
+  // to t_n; the t = 0 row is the initial state. The penalty springs' forces are forces of the
+  // configuration u_n, like f_int: the row at t_n is observed after them.
+  auto observe_row = [&](long n) {
+    if (!monitor.observe(s, kinetic0)) return false;
+    if (progress) progress(n, planned, s.time);
+    return true;
+  };
   for (;;) {
     const long n = s.step;
     const bool observe = monitor.is_monitor_step(n);
     const StressTracking* tracking = monitor.stress_tracking(n);
     evaluate(model, settings.prescribed, s, observe, tracking);
-    if (with_contact) {
-      if (penalty)
-        penalty_phase(model, settings.obstacles, springs, s);
-      else
-        contact_phase(model, settings.obstacles, settings.contact, bipotential, s);
-    }
     if (!(s.forces.min_jacobian > 0.0)) {
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
       break;
     }
     if (tracking) monitor.track_stress(s, s.forces.stress);
-    if (observe) {
-      if (!monitor.observe(s, kinetic0)) break;
-      if (progress) progress(n, planned, s.time);
+    if (penalty) {
+      if (with_contact) penalty_phase(model, settings.obstacles, springs, s);
+      if (observe && !observe_row(n)) break;
+      if (n == planned) break;
+    } else {
+      if (observe && !observe_row(n)) break;
+      if (n == planned) break;
+      if (with_contact) contact_phase(model, settings.obstacles, settings.contact, bipotential, s);
     }
-    if (n == planned) break;
     if (with_contact) monitor.contact_step(s.time, s.dt);  // its forces act over [t_n, t_n+1]
     update(s);
   }

@@ -54,8 +54,11 @@ struct RunSettings {
 
 enum class RunStatus { ok, diverged };
 
-// History columns, in order; then per probe <name>_ux, _uy, _vx, _vy.
-std::vector<std::string> history_columns(const std::vector<Probe>& probes);
+// History columns, in order; then per contact interface (contact_interface_names(), when the
+// run has contact candidates) <name>_normal_force, _tangential_force, _contact_nodes,
+// _contact_work, _friction_dissipation; then per probe <name>_ux, _uy, _vx, _vy.
+std::vector<std::string> history_columns(const std::vector<Probe>& probes,
+                                         const std::vector<std::string>& interfaces = {});
 
 struct History {
   std::vector<std::string> columns;
