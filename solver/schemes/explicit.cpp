@@ -3,6 +3,7 @@
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
 #include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -12,7 +13,7 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   const ThreadScope threads(settings.threads);
   RunResult result;
   result.threads = threads.threads();
-  State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement);
+  State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement, settings.loads);
   // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
   // half of any contact impulse of the first step.
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
@@ -29,8 +30,21 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
                                            settings.body_pairs);
   const ContactSet& contact = penalty ? springs.set : bipotential.set;
   const bool with_contact = !contact.candidates.empty();
+  // A quasi-static start (relaxation.hpp): the scene relaxed under its t = 0 loads with this
+  // scheme's steps and contact, then the clock starts from there.
+  result.relaxed = settings.relaxation.enabled;
+  const bool relaxed_ok =
+      !result.relaxed ||
+      relax_explicit_start(model, settings,
+                           {with_contact && !penalty ? &bipotential : nullptr, with_contact && penalty ? &springs : nullptr},
+                           s, result.relaxation);
   RunMonitor monitor(model, settings, result, contact);
   const long planned = monitor.planned_steps();
+  if (!relaxed_ok) {
+    monitor.diverge(s, "relaxation: " + result.relaxation.reason);
+    monitor.finish(s);
+    return result;
+  }
 
   for (;;) {
     const long n = s.step;
