@@ -329,6 +329,68 @@ TEST_F(CliTest, DivergedRunIsAResult) {
   EXPECT_NE(summary.str().find("\"status\": \"diverged\""), std::string::npos) << summary.str();
 }
 
+// [relaxation] and [[loads]]: each bad value is one line naming the file, the key and what is
+// allowed, exit 2, nothing written.
+TEST_F(CliTest, RejectsBadRelaxationAndLoads) {
+  expect_rejected(kGood + "[relaxation]\ntolerance = 0.0\n", "", {":26:", "relaxation.tolerance", "in (0, 0.1]"});
+  expect_rejected(kGood + "[relaxation]\ntolerance = 0.5\n", "", {"relaxation.tolerance", "in (0, 0.1]"});
+  expect_rejected(kGood + "[relaxation]\nmax_steps = 0\n", "", {"relaxation.max_steps", "expected an integer in [1, 100000000]"});
+  expect_rejected(kGood + "[relaxation]\nmax_steps = 2.5\n", "", {"relaxation.max_steps", "expected an integer"});
+  expect_rejected(kGood + "[relaxation]\nenabled = \"yes\"\n", "", {"relaxation.enabled", "expected true or false"});
+  expect_rejected(kGood + "[relaxation]\ntolerence = 1e-6\n", "",
+                  {"relaxation.tolerence: unknown key (did you mean \"tolerance\"?); allowed here:", "max_steps"});
+  expect_rejected(kGood, "--set relaxation.tolerance=-1", {"--set relaxation.tolerance", "in (0, 0.1]"});
+  expect_rejected(kGood, "--set relaxation=true", {"relaxation", "expected a table"});
+  const std::string load = "[[loads]]\nnodes = \"left\"\n";
+  expect_rejected(kGood + load, "", {"loads[0].force", "missing required key"});
+  expect_rejected(kGood + load + "force = [1.0]\n", "", {"loads[0].force", "expected an array of two numbers [x, y]"});
+  expect_rejected(kGood + load + "force = [1.0, \"x\"]\n", "", {"loads[0].force", "expected an array of two numbers"});
+  expect_rejected(kGood + load + "force = [1.0, 0.0]\ndistribution = \"area\"\n", "",
+                  {"loads[0].distribution", "\"mass\"", "\"equal\""});
+  expect_rejected(kGood + load + "force = [1.0, 0.0]\nramp = -1.0\n", "", {"loads[0].ramp", ">= 0"});
+  expect_rejected(kGood + load + "force = [1.0, 0.0]\nstart = -0.1\n", "", {"loads[0].start", ">= 0"});
+  expect_rejected(kGood + load + "force = [1.0, 0.0]\nstrat = 0.1\n", "", {"loads[0].strat: unknown key (did you mean \"start\"?)"});
+  expect_rejected(kGood + "[[loads]]\nforce = [1.0, 0.0]\n", "", {"loads[0].nodes", "missing required key"});
+  expect_rejected(kGood + "[[loads]]\nnodes = \"nowhere\"\nforce = [1.0, 0.0]\n", "",
+                  {"loads[0].nodes", "no node set \"nowhere\"", "available"});
+  expect_rejected(kGood + "[[loads]]\nbody = \"q\"\nnodes = \"left\"\nforce = [1.0, 0.0]\n", "",
+                  {"loads[0].body", "no body named \"q\""});
+  expect_rejected(kGood, "--set loads=1", {"loads", "expected an array of tables"});
+}
+
+// A relaxed run reports its relaxation in summary.json; a relaxation that does not converge is
+// a result (exit 3, status diverged with the reason, outputs written), not a crash. kGood's
+// body is free: without loads it is at rest and in equilibrium at once; under gravity it falls
+// and cannot converge.
+TEST_F(CliTest, RelaxationIsReported) {
+  const std::string file = write("case.toml", kGood + "[relaxation]\n");
+  const Outcome o = run("run " + file + " --out " + out() + " --quiet");
+  ASSERT_EQ(o.status, 0) << o.output;
+  std::stringstream summary;
+  summary << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
+  for (const char* key : {"\"relaxation\": {", "\"converged\": true", "\"steps\": 0", "\"velocity_resets\"",
+                          "\"residual\"", "\"kinetic_ratio\"", "\"settlement\"", "\"drift\": {", "\"displacement_max\""})
+    EXPECT_NE(summary.str().find(key), std::string::npos) << key << " in " << summary.str();
+  fs::remove_all(out());
+  const std::string falling = write("falling.toml", "gravity = [0.0, -9.81]\n" + kGood + "[relaxation]\nmax_steps = 100\n");
+  const Outcome f = run("run " + falling + " --out " + out());
+  EXPECT_EQ(f.status, 3) << f.output;
+  EXPECT_NE(f.output.find("relaxation: did not converge in 100 steps"), std::string::npos) << f.output;
+  std::stringstream diverged;
+  diverged << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
+  for (const char* key : {"\"status\": \"diverged\"", "\"converged\": false", "\"reason\": \"relaxation: did not converge"})
+    EXPECT_NE(diverged.str().find(key), std::string::npos) << key << " in " << diverged.str();
+  // Without the table, or with enabled = false, summary.json says null.
+  for (const std::string extra : {"", "[relaxation]\nenabled = false\n"}) {
+    fs::remove_all(out());
+    const Outcome n = run("run " + write("plain.toml", kGood + extra) + " --out " + out() + " --quiet");
+    ASSERT_EQ(n.status, 0) << n.output;
+    std::stringstream plain;
+    plain << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
+    EXPECT_NE(plain.str().find("\"relaxation\": null"), std::string::npos) << plain.str();
+  }
+}
+
 // Every command answers --help (and -h) on stdout with exit 0 and names each of its options;
 // the top-level usage names every command. The option lists are what each command accepts
 // (an option missing from its help would be a documentation defect).

@@ -300,7 +300,7 @@ TEST(Coulomb, ClassifyOpenStickSlip) {
 struct StepRecord {
   double time = 0.0;
   Vec2 momentum = Vec2::Zero();  // at t_n, with half of step n's contact impulse
-  Vec2 momentum_free = Vec2::Zero();  // at t_n, before step n's contact (a history row's) 
+  Vec2 momentum_row = Vec2::Zero();  // at t_n with the reactions at t_n (a history row's)
   double total_energy = 0.0;     // kinetic + strain at t_n [J]
   int active = 0, stick = 0, slip = 0;
   double normal_force = 0.0, tangential_force = 0.0;  // of step n [N]
@@ -329,11 +329,16 @@ struct Impact {
     out.reserve(steps + 1);
     for (long n = 0; n <= steps; ++n) {
       evaluate(model, {}, s, true);
-      const Vec2 momentum_free = linear_momentum(model, s);
+      // A history row's momentum: the free accelerations plus the reactions at t_n, those of
+      // the last step (docs/outputs.md, History semantics).
+      const Eigen::VectorXd a_free = s.a;
+      add_reaction_accelerations(model, b, s);
+      const Vec2 momentum_row = linear_momentum(model, s);
+      s.a = a_free;
       contact_phase(model, obstacles, settings, b, s);
       const Energies e = observe_energies(model, s, u0);
       StepRecord r;
-      r.momentum_free = momentum_free;
+      r.momentum_row = momentum_row;
       r.time = s.time;
       r.momentum = linear_momentum(model, s);
       r.total_energy = e.total();
@@ -561,10 +566,9 @@ TEST(ContactImpact, SlidingImpactTransmitsMuTimesNormalImpulse) {
   EXPECT_NEAR(wc + d, -nodal_loss, 0.05 * nodal_loss);
 
   // The same impact through run_explicit, sampled every step: its history rows are the
-  // steps above (same operations in the same order). Row n holds the state at t_n before the
-  // contact of step n (its velocity v_n of the free accelerations) and the contact results of
-  // the step ending at t_n, step n - 1 (docs/outputs.md, History semantics); row 0 the initial
-  // state. contact_slip = contact_nodes whenever contact is active.
+  // steps above (same operations in the same order). Row n holds the state at t_n with the
+  // reactions at t_n, those solved in step n - 1, and the contact results of that step
+  // (docs/outputs.md, History semantics); row 0 the initial state. contact_slip = contact_nodes whenever contact is active.
   RunSettings settings;
   settings.dt = im.dt;
   settings.end_time = static_cast<double>(steps) * im.dt;
@@ -578,7 +582,7 @@ TEST(ContactImpact, SlidingImpactTransmitsMuTimesNormalImpulse) {
   const std::size_t nodes = h.column("contact_nodes"), slip = h.column("contact_slip"),
                     px = h.column("momentum_x"), dis = h.column("friction_dissipation"),
                     pen = h.column("penetration_max");
-  EXPECT_EQ(h.at(0, px), rec[0].momentum_free.x());
+  EXPECT_EQ(h.at(0, px), rec[0].momentum_row.x());
   EXPECT_EQ(h.at(0, nodes), 0.0);
   EXPECT_EQ(h.at(0, dis), 0.0);
   for (std::size_t row = 1; row < h.rows(); ++row) {
@@ -586,7 +590,7 @@ TEST(ContactImpact, SlidingImpactTransmitsMuTimesNormalImpulse) {
     if (h.at(row, nodes) > 0.0) {
       EXPECT_EQ(h.at(row, slip), h.at(row, nodes)) << "row " << row;
     }
-    EXPECT_NEAR(h.at(row, px), rec[row].momentum_free.x(), 1e-12 * std::abs(p0.x())) << "row " << row;
+    EXPECT_NEAR(h.at(row, px), rec[row].momentum_row.x(), 1e-12 * std::abs(p0.x())) << "row " << row;
     EXPECT_NEAR(h.at(row, dis), rec[row - 1].friction_dissipation, 1e-12 * d) << "row " << row;
     EXPECT_LE(h.at(row, pen), 1e-12 * 0.01) << "row " << row;
   }

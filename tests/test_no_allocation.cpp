@@ -1,6 +1,7 @@
 // The explicit step performs no heap allocation (design 4): after initial_state, any number of
-// evaluate() + update() calls, with or without energies, with prescribed DOFs, gravity and
-// every element formulation, must not allocate.
+// evaluate() + update() calls, with or without energies, with prescribed DOFs, nodal loads,
+// gravity and every element formulation, must not allocate; nor do the steps of a relaxation
+// (a quasi-static start).
 //
 // Every allocation entry point of this executable is counted in one global atomic counter:
 // all replaceable global operator new / delete overloads, and also the C allocation functions
@@ -19,7 +20,9 @@
 #include <new>
 #include <vector>
 
+#include "solver/contact/obstacle.hpp"
 #include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/relaxation.hpp"
 #include "solver/observers/observers.hpp"
 #include "verification_meshes.hpp"
 
@@ -99,10 +102,14 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
     prescribed.push_back({2 * mesh.node_sets.at("top").front() + 1,
                           PrescribedDof::Kind::velocity, 0.5, 0.0});
 
+    // Nodal loads: one on from the start, one switched on and ramped during the steps.
+    const std::vector<NodalLoad> loads = {{2 * mesh.node_sets.at("top").back(), -3.0, 0.0, 0.0},
+                                          {2 * mesh.node_sets.at("top").back() + 1, 2.0, 1e-5, 1e-4}};
+
     for (bool with_prescribed : {false, true}) {
       const std::vector<PrescribedDof> none;
       const std::vector<PrescribedDof>& p = with_prescribed ? prescribed : none;
-      State s = initial_state(model, p, 0.9 * model.critical_dt);
+      State s = initial_state(model, p, 0.9 * model.critical_dt, {}, loads);
       const Eigen::VectorXd u0 = s.u;
       std::vector<double> cell_vm(model.num_cells());
       double sink = 0.0;
@@ -137,6 +144,42 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
       EXPECT_GT(s.u.norm(), 0.0);
       EXPECT_EQ(s.step, 70);
     }
+  }
+}
+
+// A relaxation step (solver/schemes/relaxation.hpp): evaluate() with the held prescribed DOFs
+// and the loads at their t = 0 value, the contact solve of either explicit scheme, the residual,
+// the kinetic damping with its resets. A block resting on the ground under gravity with
+// friction, a held node and a load; after the set-up no step allocates.
+TEST(NoAllocation, RelaxationStepsDoNotAllocate) {
+  const Mesh mesh = verification::grid_mesh(0.1, 0.05, 10, 5, 0.0, false);
+  const Model model = verification::single_body_model(
+      mesh, StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress), PlaneMode::stress,
+      ElementKind::q4_full, 0.05, 0.1, Vec2(0.0, -9.81));
+  RunSettings settings;
+  settings.dt = 0.9 * model.critical_dt;
+  settings.end_time = 1.0;
+  settings.obstacles = {make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
+  settings.friction = {{0.5}};
+  settings.prescribed = {{2 * mesh.node_sets.at("top").front(), PrescribedDof::Kind::velocity, 0.0, 0.0}};
+  settings.loads = {{2 * mesh.node_sets.at("top").back() + 1, -1.0, 0.0, 0.0}};
+  settings.relaxation.enabled = true;
+  settings.relaxation.tolerance = 1e-14;  // not reached in these steps
+  const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
+  for (const bool penalty : {false, true}) {
+    SCOPED_TRACE(penalty ? "penalty" : "bi-potential");
+    BipotentialContact bipotential = make_bipotential_contact(model, settings.obstacles, settings.friction,
+                                                              settings.prescribed);
+    PenaltyContact springs = make_penalty_contact(model, settings.obstacles, settings.friction,
+                                                  settings.prescribed, PenaltySettings{});
+    Relaxation r(model, settings, 0.5 * settings.dt, u0,
+                 {penalty ? nullptr : &bipotential, penalty ? &springs : nullptr});
+    for (int n = 0; n < 5; ++n) ASSERT_EQ(r.step(), Relaxation::Status::running);
+    const long before = g_allocations.load();
+    for (int n = 0; n < 300; ++n) ASSERT_EQ(r.step(), Relaxation::Status::running);
+    EXPECT_EQ(g_allocations.load() - before, 0);
+    EXPECT_GT(r.report().velocity_resets, 0);  // the resets ran too
+    EXPECT_GT(r.state().u.norm(), 0.0);
   }
 }
 

@@ -180,21 +180,17 @@ TEST(ObliquePlate, FrictionSlowsTheRebound) {
 
 TEST(ObliquePlate, EnergyBookkeepingClosesAtEveryRow) {
   // The contact work W_c = sum dt R.v_n (v_n with the step's reactions) is exactly the change
-  // of the half-step kinetic energy that the reactions cause. A history row at t_n holds the
-  // velocity before the reactions of step n -> n+1 (docs/outputs.md, History semantics), so
-  // E(t) - E0 - W_c is only:
-  //   (a) the gap between the integer-step energy and its half-step counterpart for the smooth
-  //       motion, O((omega dt)^2): measured 2.9e-4 (M1) and 6.6e-6 (M2) after the impact; the
-  //       allowance 0.92 / N is five interior-node masses m/N stopped from the normal speed
-  //       5 m/s, 5 (1/8) (m/N) 25 / E0 with E0 = 1/2 m 34 (2.1e-3 on M1, 2.7e-4 on M2);
-  //   (b) for every node held in contact, the free acceleration that step n's reaction r_I
-  //       will cancel: v_n = v_{n-1/2} + dt/2 a_free holds dt/2 r_I/m_I more than the node's
-  //       velocity, 1/8 dt^2 r_I^2 / m_I of kinetic energy, at most
-  //       dt^2 (sum |r_I|)^2 / (8 m_min) <= dt^2 (1 + mu)^2 F_n^2 / (8 m_min), F_n the normal
-  //       force of the step (the next row's normal_force) and m_min the smallest nodal mass.
-  // W_c includes the tangential work, which is -D up to a half-step offset, so with friction
-  // the balance reads E - E0 = W_c; the form |E + D - E0 - W_c| counts friction twice and is
-  // printed for comparison only. The t = 0 row is the initial state: exactly E0, W_c = D = 0.
+  // of the half-step kinetic energy that the reactions cause. A history row at t_n holds
+  // v_n = v_{n-1/2} + dt/2 a_n with the reactions at t_n, those solved in the step before
+  // (docs/outputs.md, History semantics), so E(t) - E0 - W_c is only the gap between the
+  // integer-step energy and its half-step counterpart: O((omega dt)^2) for the smooth motion
+  // (measured 2.9e-4 on M1 and 6.6e-6 on M2 once the contact has ended), plus 1/8 m_I v^2 for
+  // each node I stopped from v in the step before the row (v_n holds half of that step's
+  // impulse). Bound: five interior-node masses m/N stopped from the normal speed 5 m/s,
+  // 5 (1/8) (m/N) 25 / E0 with E0 = 1/2 m 34: 0.92/N (2.1e-3 on M1, 2.7e-4 on M2). W_c
+  // includes the tangential work, which is -D up to a half-step offset, so with friction the
+  // balance reads E - E0 = W_c; the form |E + D - E0 - W_c| counts friction twice and is
+  // printed for comparison only. The t = 0 row is the initial state: E0, W_c = D = 0, no force.
   struct Case {
     const char* mesh;
     double dt, mu;
@@ -205,7 +201,6 @@ TEST(ObliquePlate, EnergyBookkeepingClosesAtEveryRow) {
     const RunResult& r = run.result;
     ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
     const History& h = r.history;
-    ASSERT_EQ(h.rows(), static_cast<std::size_t>(r.steps + 1)) << "every step sampled";
     const std::size_t e = h.column("total_energy"), d = h.column("friction_dissipation"),
                       w = h.column("contact_work"), fn = h.column("normal_force");
     const double e0 = r.initial_energy;
@@ -213,26 +208,20 @@ TEST(ObliquePlate, EnergyBookkeepingClosesAtEveryRow) {
     EXPECT_EQ(h.at(0, w), 0.0);
     EXPECT_EQ(h.at(0, d), 0.0);
     EXPECT_EQ(h.at(0, fn), 0.0);
-    const double smooth = 5.0 * 0.125 * 25.0 / (0.5 * 34.0) / run.prepared.model.num_nodes();
-    const double held = c.dt * c.dt * (1.0 + c.mu) * (1.0 + c.mu) / (8.0 * run.prepared.model.mass.minCoeff() * e0);
-    double residual = 0.0, residual_with_d = 0.0, worst_slack = 1e300, after = 0.0;
+    double residual = 0.0, residual_with_d = 0.0, after = 0.0;
     for (std::size_t row = 0; row < h.rows(); ++row) {
       const double res = std::abs(h.at(row, e) - e0 - h.at(row, w)) / e0;
-      const double force = row + 1 < h.rows() ? h.at(row + 1, fn) : 0.0;
-      const double bound = smooth + held * force * force;
-      EXPECT_LT(res, bound) << c.mesh << " dt " << c.dt << " mu " << c.mu << " row " << row;
       residual = std::max(residual, res);
-      worst_slack = std::min(worst_slack, bound / std::max(res, 1e-300));
-      if (force == 0.0 && h.at(row, fn) == 0.0 && row > 0) after = std::max(after, res);
+      if (row > 0 && h.at(row, fn) == 0.0 && h.at(row, w) != 0.0) after = std::max(after, res);
       residual_with_d =
           std::max(residual_with_d, std::abs(h.at(row, e) + h.at(row, d) - e0 - h.at(row, w)) / e0);
     }
-    std::printf("[plate] %s dt %.0e mu %.1f: max |E - E0 - W_c| / E0 = %.3e (rows without contact "
-                "%.3e; smallest bound / residual %.1f), max |E + D - E0 - W_c| / E0 = %.3e, W_c / E0 = "
-                "%.3e, D / E0 = %.3e\n",
-                c.mesh, c.dt, c.mu, residual, after, worst_slack, residual_with_d, r.contact_work / e0,
+    const double bound = 5.0 * 0.125 * 25.0 / (0.5 * 34.0) / run.prepared.model.num_nodes();
+    std::printf("[plate] %s dt %.0e mu %.1f: max |E - E0 - W_c| / E0 = %.3e (bound %.2e; after the "
+                "contact %.3e), max |E + D - E0 - W_c| / E0 = %.3e, W_c / E0 = %.3e, D / E0 = %.3e\n",
+                c.mesh, c.dt, c.mu, residual, bound, after, residual_with_d, r.contact_work / e0,
                 r.friction_dissipation / e0);
-    EXPECT_LT(after, smooth) << c.mesh << " dt " << c.dt << " mu " << c.mu;
+    EXPECT_LT(residual, bound) << c.mesh << " dt " << c.dt << " mu " << c.mu;
   }
 }
 

@@ -263,11 +263,9 @@ TEST(Schemes, HistoryColumnsMeanTheSameInEveryScheme) {
   //   Newton tolerance; bound 1e-10).
   // - contact_work W_c is the work of all contact forces on the body, so the body's own
   //   balance |E - E0 - W_c| / E0 closes in every scheme up to how each discretizes it:
-  //     semi-explicit: W_c adds dt R . v_n^+ (v_n with the step's reactions), while row n
-  //       holds v_n before the reactions of step n -> n+1: for each node held in contact
-  //       1/8 dt^2 r^2 / m more kinetic energy; bound per row 0.92 / N + dt^2 (1 + mu)^2
-  //       F_n^2 / (8 m_min E0) with F_n the next row's normal force (test_oblique_plate,
-  //       EnergyBookkeepingClosesAtEveryRow, derives both terms); measured 2.6e-3 at most;
+  //     semi-explicit: W_c adds dt R . v_n while row n's v_n holds half the impulse of the
+  //       step before it (its reactions at t_n): 1/8 m v^2 per node stopped in that step;
+  //       bound 0.92 / N = 2.1e-3 (test_oblique_plate); measured 3.1e-4 (mu 0), 3.6e-4 (mu 0.1);
   //     implicit: W_c = sum R . du over completed steps, E at the same step: exact for a
   //       linear material at theta = 1/2 (test_implicit), O(dt^2) here: measured 1.10e-4 (and
   //       2.6e-5 at dt = 5e-6); bound 2.5e-4;
@@ -319,12 +317,6 @@ TEST(Schemes, HistoryColumnsMeanTheSameInEveryScheme) {
         impulse_n += r.dt * h.at(row, fn);
         impulse_t += r.dt * h.at(row, ft);
         body = std::max(body, std::abs(e - e0 - w) / e0);
-        if (scheme == "semi_explicit") {
-          const double next = row + 1 < h.rows() ? h.at(row + 1, fn) : 0.0;
-          const double held = r.dt * r.dt * (1.0 + mu) * (1.0 + mu) * next * next /
-                              (8.0 * run.prepared.model.mass.minCoeff() * e0);
-          EXPECT_LT(std::abs(e - e0 - w) / e0, 0.92 / run.prepared.model.num_nodes() + held) << "t = " << t;
-        }
         body_centred = std::max(body_centred, std::abs(e - e0 - w + 0.5 * dw) / e0);
         brief = std::max(brief, std::abs(e + d - e0 - w + u) / e0);
         err_max = std::max(err_max, h.at(row, err));
@@ -364,6 +356,7 @@ TEST(Schemes, HistoryColumnsMeanTheSameInEveryScheme) {
       EXPECT_NEAR(impulse_n, dpy, 1e-10 * std::abs(dpy));
       EXPECT_NEAR(impulse_t, dpx, 1e-10 * std::abs(dpy));
       if (scheme == "semi_explicit") {
+        EXPECT_LT(body, 0.92 / run.prepared.model.num_nodes());
         EXPECT_EQ(h.at(0, fn), 0.0);  // the t = 0 row is the initial state
         EXPECT_EQ(h.at(0, work), 0.0);
         EXPECT_NEAR(h.at(0, total), e0, 1e-14 * e0);

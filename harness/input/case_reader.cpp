@@ -151,6 +151,20 @@ void check_column_name(const TableReader& t, const std::string& name) {
   if (name.empty()) t.fail("name", "must not be empty (it names CSV columns)");
 }
 
+LoadSpec read_load(const TableReader& t, const std::string& first_body) {
+  LoadSpec l;
+  l.where = t.path();
+  l.body = t.text("body", first_body);
+  l.nodes = t.text("nodes");
+  if (!t.has("force")) t.fail("force", "missing required key: the total force [x, y] in N on the node set");
+  l.force = t.vec2("force");
+  l.by_mass = t.choice("distribution", "mass", {"mass", "equal"}) == "mass";
+  l.start = t.number("start", 0.0, Range::non_negative());
+  l.ramp = t.number("ramp", 0.0, Range::non_negative());
+  t.finish();
+  return l;
+}
+
 ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
   ProbeSpec p;
   p.where = t.path();
@@ -288,6 +302,13 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
   for (const auto& t : root.tables("initial_velocity"))
     c.initial_velocities.push_back(read_initial_velocity(t, first_body));
+  for (const auto& t : root.tables("loads")) c.loads.push_back(read_load(t, first_body));
+  if (const auto rx = root.table("relaxation")) {
+    c.relaxation.enabled = rx->boolean("enabled", true);
+    c.relaxation.tolerance = rx->number("tolerance", 1e-6, Range{0.0, 0.1, true, false});
+    c.relaxation.max_steps = rx->integer("max_steps", 100000, 1, 100'000'000);
+    rx->finish();
+  }
 
   const auto obstacles = root.tables("obstacles");
   for (std::size_t i = 0; i < obstacles.size(); ++i) {

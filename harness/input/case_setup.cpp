@@ -9,6 +9,7 @@
 
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
+#include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/time_step.hpp"
 
 namespace ricochet {
@@ -243,6 +244,21 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     }
   }
 
+  // [[loads]]: the total force shared over the set's nodes by lumped mass (m_i / sum m) or
+  // equally, one NodalLoad per loaded DOF.
+  for (const LoadSpec& l : c.loads) {
+    const int bi = body_index(c, l.body, l.where, "body");
+    const int node0 = p.model.bodies[bi].first_node;
+    const std::vector<int>& nodes = node_set(c, p.meshes[bi], l.nodes, l.where, "nodes");
+    double total = 0.0;
+    for (int local : nodes) total += l.by_mass ? p.model.mass[2 * (node0 + local)] : 1.0;
+    for (int local : nodes) {
+      const double share = (l.by_mass ? p.model.mass[2 * (node0 + local)] : 1.0) / total;
+      for (int k = 0; k < 2; ++k)
+        if (l.force[k] != 0.0) s.loads.push_back({2 * (node0 + local) + k, l.force[k] * share, l.start, l.ramp});
+    }
+  }
+
   for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back(o.shape);
   s.friction.assign(c.bodies.size(), std::vector<double>(c.obstacles.size(), 0.0));
   for (std::size_t b = 0; b < c.bodies.size(); ++b)
@@ -269,6 +285,13 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   // It also gives the springs' own limit, which the summary reports for fixed steps too.
   const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
   s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;
+  // [relaxation]: the explicit schemes relax at half the run's step, the implicit scheme with
+  // the semi-explicit loop at half the automatic explicit step (safety x the elements' critical
+  // step) (solver/schemes/relaxation.hpp, kRelaxationStepFactor).
+  s.relaxation.enabled = c.relaxation.enabled;
+  s.relaxation.tolerance = c.relaxation.tolerance;
+  s.relaxation.max_steps = c.relaxation.max_steps;
+  s.relaxation.dt = kRelaxationStepFactor * (c.scheme == Scheme::implicit ? c.dt_safety * p.model.critical_dt : s.dt);
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");

@@ -90,6 +90,24 @@ struct InitialVelocitySpec {
   std::string where;
 };
 
+// [[loads]]: a total force on one node set, ramped up in time (docs/case-format.md).
+struct LoadSpec {
+  std::string body;
+  std::string nodes;             // node set of that body
+  Vec2 force = Vec2::Zero();     // total over the set [N]
+  bool by_mass = true;           // shared by lumped mass (true) or equally (false)
+  double start = 0.0;            // [s]
+  double ramp = 0.0;             // [s]
+  std::string where;
+};
+
+// [relaxation]: a quasi-static start (solver/schemes/relaxation.hpp).
+struct RelaxationSpec {
+  bool enabled = false;
+  double tolerance = 1e-6;  // [-]
+  long max_steps = 100000;
+};
+
 struct ProbeSpec {
   std::string name;
   std::string body;
@@ -133,6 +151,8 @@ struct CaseSpec {
   std::vector<BodySpec> bodies;
   std::vector<BoundarySpec> boundaries;
   std::vector<InitialVelocitySpec> initial_velocities;
+  std::vector<LoadSpec> loads;
+  RelaxationSpec relaxation;
   std::vector<ObstacleSpec> obstacles;
   std::vector<ContactPairSpec> contact_pairs;
   ContactSettings contact;

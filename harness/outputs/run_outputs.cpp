@@ -132,6 +132,23 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   } else {
     j["diverged"] = nullptr;
   }
+  // The quasi-static start (docs/outputs.md), null without one.
+  if (r.relaxed) {
+    const RelaxationReport& x = r.relaxation;
+    Json rx = Json::object();
+    rx["converged"] = x.converged;
+    rx["steps"] = x.steps;
+    rx["velocity_resets"] = x.velocity_resets;
+    rx["dt"] = x.dt;
+    rx["tolerance"] = pc.settings.relaxation.tolerance;
+    rx["residual"] = x.residual;
+    rx["kinetic_ratio"] = x.kinetic_ratio;
+    rx["settlement"] = x.settlement;
+    rx["wall_seconds"] = x.wall_seconds;
+    j["relaxation"] = rx;
+  } else {
+    j["relaxation"] = nullptr;
+  }
   if (pc.spec.scheme == Scheme::implicit) {
     Json im = Json::object();
     im["theta"] = pc.spec.implicit.theta;
@@ -161,6 +178,18 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["initial_energy"] = r.initial_energy;
   j["energy_error_max"] = r.energy_error_max;
   j["penetration_max"] = r.penetration_max;
+  j["displacement_max"] = r.displacement_max;
+  Json drift = Json::object();
+  drift["max"] = r.drift_max;
+  drift["until"] = r.rest_until;
+  drift["body"] = Json();
+  drift["node"] = Json();
+  for (const BodyInfo& b : pc.model.bodies)
+    if (r.drift_node >= b.first_node && r.drift_node < b.first_node + b.num_nodes) {
+      drift["body"] = b.name;
+      drift["node"] = r.drift_node - b.first_node;
+    }
+  j["drift"] = drift;
   j["friction_dissipation"] = r.friction_dissipation;
   j["contact_work"] = r.contact_work;
   // Stress peaks over every step (not over the samples), docs/outputs.md.

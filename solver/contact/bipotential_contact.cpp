@@ -66,6 +66,17 @@ int gauss_seidel(const ContactSettings& set, BipotentialContact& b, bool& conver
 
 }  // namespace
 
+void add_reaction_accelerations(const Model& model, const BipotentialContact& b, State& s) {
+  const ContactSet& c = b.set;
+  for (int k : c.active) {
+    const Stencil& st = c.stencil[k];
+    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+    const LocalPair r = c.reaction[k];
+    const Vec2 force = r.n * n + r.t * t;
+    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force / model.mass[2 * st.node[j]];
+  }
+}
+
 void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& set, BipotentialContact& b, State& s) {
   ContactSet& c = b.set;
@@ -119,14 +130,8 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   const int sweeps = c.any_friction ? gauss_seidel<true>(set, b, converged) : gauss_seidel<false>(set, b, converged);
 
   // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
-  for (int k : c.active) {
-    const Stencil& st = c.stencil[k];
-    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-    const LocalPair r = c.reaction[k];
-    const Vec2 force = r.n * n + r.t * t;
-    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force / model.mass[2 * st.node[j]];
-    record(c, k, classify(r, c.candidates[k].friction_coeff));
-  }
+  add_reaction_accelerations(model, b, s);
+  for (int k : c.active) record(c, k, classify(c.reaction[k], c.candidates[k].friction_coeff));
   // Work with the final reactions: dt R.v_n with v_n = v_{n-1/2} + dt/2 a_n, exactly the change
   // of the half-step kinetic energy 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2 that R causes (a node
   // stopped dead loses 1/2 m v^2); slip work -r_t times the slip increment dt t.v_{n+1/2} of the

@@ -32,4 +32,10 @@ BipotentialContact make_bipotential_contact(const Model& model, const std::vecto
 void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& settings, BipotentialContact& c, State& s);
 
+// Adds the reactions of the last contact_phase() (c.reaction of c.active) to s.a as R/m, the
+// same operations contact_phase() ends with. The explicit loop calls it on a copy of the free
+// accelerations to observe the state at t_n with the reactions that act at t_n (docs/outputs.md,
+// History semantics). Allocates nothing.
+void add_reaction_accelerations(const Model& model, const BipotentialContact& c, State& s);
+
 }  // namespace ricochet

@@ -16,6 +16,7 @@ Energies observe_energies(const Model& model, const State& s, const Eigen::Vecto
   e.strain = s.forces.strain_energy;
   e.hourglass = s.forces.hourglass_energy + s.hourglass_dissipation;
   e.external_work = s.f_ext.dot(s.u - u0) + s.reaction_work;
+  if (!s.loads.empty()) e.external_work += s.load_work;  // (a run without loads keeps its bits)
   return e;
 }
 

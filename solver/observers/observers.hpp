@@ -9,7 +9,7 @@ struct Energies {
   double kinetic = 0.0;         // 1/2 v_n^T M v_n [J]
   double strain = 0.0;          // sum vol W(F) [J]
   double hourglass = 0.0;       // stored (stiffness form) + dissipated (viscous form) [J]
-  double external_work = 0.0;   // body forces + prescribed-DOF reactions [J]
+  double external_work = 0.0;   // body forces + prescribed-DOF reactions + nodal loads [J]
   double friction_dissipation = 0.0;  // [J]
   // kinetic + strain + hourglass [J]
   double total() const { return kinetic + strain + hourglass; }

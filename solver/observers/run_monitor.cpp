@@ -192,6 +192,10 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   result.stress_measure = settings.stress_measure;
   result.total_mass = 0.5 * model.mass.sum();
   result.contact_candidates = static_cast<int>(contact.candidates.size());
+  // The rest window of `drift`: up to the first time a nodal load changes.
+  result.rest_until = settings.end_time;
+  for (const NodalLoad& l : settings.loads)
+    if (!l.constant()) result.rest_until = std::min(result.rest_until, l.start);
   wall0_ = std::chrono::steady_clock::now();
   cpu0_ = std::clock();
 }
@@ -278,6 +282,7 @@ void RunMonitor::diverge(const State& s, std::string reason) {
 bool RunMonitor::observe(const State& s, double kinetic0) {
   const long n = s.step;
   if (n == 0) u0_ = s.u;
+  track_displacement(s);
   const ContactStep& c = contact_.last;
   Energies e = observe_energies(model_, s, u0_);
   e.friction_dissipation = contact_.total.friction_dissipation;
@@ -340,6 +345,21 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     ++next_field_;
   }
   return true;
+}
+
+void RunMonitor::track_displacement(const State& s) {
+  double largest = 0.0;
+  int node = -1;
+  for (int i = 0; i < model_.num_nodes(); ++i) {
+    const double d = (s.u.segment<2>(2 * i) - u0_.segment<2>(2 * i)).squaredNorm();
+    if (d > largest) largest = d, node = i;
+  }
+  largest = std::sqrt(largest);
+  result_.displacement_max = std::max(result_.displacement_max, largest);
+  if (s.time <= result_.rest_until && largest > result_.drift_max) {
+    result_.drift_max = largest;
+    result_.drift_node = node;
+  }
 }
 
 void RunMonitor::finish(const State& s) {

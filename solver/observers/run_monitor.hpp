@@ -54,6 +54,9 @@ class RunMonitor {
   void finish(const State& s);
 
  private:
+  // The largest node displacement from u0_ (RunResult::displacement_max, drift_max).
+  void track_displacement(const State& s);
+
   const Model& model_;
   const RunSettings& settings_;
   RunResult& result_;

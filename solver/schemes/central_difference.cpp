@@ -40,7 +40,7 @@ void advance(long i0, long i1, double dt, double* __restrict v, double* __restri
 }  // namespace
 
 State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
-                    const Eigen::VectorXd& initial_displacement) {
+                    const Eigen::VectorXd& initial_displacement, const std::vector<NodalLoad>& loads) {
   const int n = model.num_dofs();
   State s;
   s.dt = dt;
@@ -60,6 +60,8 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
       s.v_half[p.dof] = p.ramp > 0.0 ? p.value / p.ramp : 0.0;
     }
   }
+  s.loads.reserve(loads.size());
+  for (const NodalLoad& l : loads) s.loads.push_back({l, 0.0, 0.0});
   return s;
 }
 
@@ -70,6 +72,15 @@ void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, 
   for_dof_ranges(s, [&](long i0, long i1) {
     accelerations(i0, i1, s.a.data(), model.inv_mass.data(), s.f_ext.data(), s.f_int.data());
   });
+  // Nodal loads F(t_n), and their work over the last step: 1/2 (F_{n-1} + F_n) (u_n - u_{n-1}).
+  for (LoadedDof& l : s.loads) {
+    const int d = l.load.dof;
+    const double f = l.load.force_at(s.time);
+    if (s.step > 0) s.load_work += 0.5 * (l.force_last + f) * (s.u[d] - l.u_last);
+    l.force_last = f;
+    l.u_last = s.u[d];
+    s.a[d] += model.inv_mass[d] * f;
+  }
   s.hourglass_dissipation += s.dt * s.forces.hourglass_power;
   if (s.step == 0) s.v_half -= 0.5 * s.dt * s.a;
   // Prescribed DOFs: the acceleration that lands v_{n+1/2} on its prescribed value; the

@@ -25,6 +25,32 @@ struct PrescribedDof {
   }
 };
 
+// A nodal force on one DOF that is switched on at `start` and ramped up linearly over `ramp`
+// seconds (ramp = 0: a step at `start`): F(t) = value * clamp((t - start) / ramp, 0, 1), and 0
+// before `start` (case key [[loads]], docs/case-format.md). Its work is accumulated in
+// State::load_work.
+struct NodalLoad {
+  int dof = 0;
+  double value = 0.0;  // [N]
+  double start = 0.0;  // [s]
+  double ramp = 0.0;   // [s]
+
+  double force_at(double t) const {
+    if (t < start) return 0.0;
+    return ramp > 0.0 && t < start + ramp ? value * (t - start) / ramp : value;
+  }
+  // Constant from t = 0 on (the loads a quasi-static start relaxes under, and that do not end
+  // a body's rest: summary.json `drift`).
+  bool constant() const { return start <= 0.0 && ramp <= 0.0; }
+};
+
+// A loaded DOF of a run: its load, and what the trapezoidal work rule needs of the last step.
+struct LoadedDof {
+  NodalLoad load;
+  double force_last = 0.0;  // F at the last evaluate() [N]
+  double u_last = 0.0;      // u of that DOF then [m]
+};
+
 struct State {
   long step = 0;
   double time = 0.0;     // t_n [s]
@@ -37,19 +63,26 @@ struct State {
   double hourglass_dissipation = 0.0;  // work of viscous hourglass forces so far [J]
   double reaction_work = 0.0;          // work of the prescribed-DOF reactions up to t_n [J]
   double reaction_power = 0.0;         // sum R v_n of the last evaluate() [W]
+  // Time-dependent nodal loads (empty: none) and their work up to t_n, by the trapezoidal rule
+  // in displacement, sum 1/2 (F_{k-1} + F_k) . (u_k - u_{k-1}): the rule under which a constant
+  // load's work is F . (u_n - u_0), as for gravity.
+  std::vector<LoadedDof> loads;
+  double load_work = 0.0;  // [J]
   ForceTotals forces;                  // totals of the last evaluate()
   ForceScratch force_scratch;          // the threaded force pass's workspace (internal_forces.hpp)
 };
 
 // Allocates the state: u_0 = initial_displacement (or 0) with prescribed displacements
-// imposed, v_0 = the model's initial velocities with prescribed velocities imposed.
+// imposed, v_0 = the model's initial velocities with prescribed velocities imposed, and the
+// nodal loads.
 State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
-                    const Eigen::VectorXd& initial_displacement = {});
+                    const Eigen::VectorXd& initial_displacement = {},
+                    const std::vector<NodalLoad>& loads = {});
 
-// Phase 1 of step n: f_int(u_n), free accelerations, then the prescribed DOFs' accelerations
-// and the work of their reactions, accumulated by the trapezoidal rule in time (the rule under
-// which 1/2 v_n^T M v_n changes by the work of the forces, to O(dt^2)). At n = 0 also sets
-// v_{-1/2} = v_0 - dt/2 a_0.
+// Phase 1 of step n: f_int(u_n), free accelerations with the nodal loads F(t_n), then the
+// prescribed DOFs' accelerations and the work of their reactions, accumulated by the
+// trapezoidal rule in time (the rule under which 1/2 v_n^T M v_n changes by the work of the
+// forces, to O(dt^2)). At n = 0 also sets v_{-1/2} = v_0 - dt/2 a_0.
 // With `stress` (internal_forces()) the pass also ranks the step's stresses. The force pass is
 // the threaded one (s.force_scratch), on the OpenMP threads in force.
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,

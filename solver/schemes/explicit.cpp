@@ -3,6 +3,7 @@
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
 #include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -12,7 +13,7 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   const ThreadScope threads(settings.threads);
   RunResult result;
   result.threads = threads.threads();
-  State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement);
+  State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement, settings.loads);
   // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
   // half of any contact impulse of the first step.
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
@@ -29,17 +30,40 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
                                            settings.body_pairs);
   const ContactSet& contact = penalty ? springs.set : bipotential.set;
   const bool with_contact = !contact.candidates.empty();
+  // A quasi-static start (relaxation.hpp): the scene relaxed under its t = 0 loads with this
+  // scheme's steps and contact, then the clock starts from there.
+  result.relaxed = settings.relaxation.enabled;
+  const bool relaxed_ok =
+      !result.relaxed ||
+      relax_explicit_start(model, settings,
+                           {with_contact && !penalty ? &bipotential : nullptr, with_contact && penalty ? &springs : nullptr},
+                           s, result.relaxation);
   RunMonitor monitor(model, settings, result, contact);
   const long planned = monitor.planned_steps();
+  if (!relaxed_ok) {
+    monitor.diverge(s, "relaxation: " + result.relaxation.reason);
+    monitor.finish(s);
+    return result;
+  }
 
   // What a history row at t_n holds (docs/outputs.md, History semantics). The bi-potential
-  // reactions of step n -> n+1 are the reactions at t_{n+1} (Cros et al. 2010, Eq. (4): the
-  // contact conditions hold at t+dt): the row at t_n is observed before they are solved, so it
-  // holds u_n, v_n = v_{n-1/2} + dt/2 a_n of the free accelerations, and the contact results up
-  // to t_n; the t = 0 row is the initial state. The penalty springs' forces are forces of the
-  // configuration u_n, like f_int: the row at t_n is observed after them.
+  // reactions solved in step n -> n+1 are the reactions at t_{n+1} (Cros et al. 2010, Eq. (3):
+  // R_{t+dt}). So the row at t_n is observed before they are solved: it holds u_n, the contact
+  // results up to t_n, and v_n = v_{n-1/2} + dt/2 a_n with a_n the accelerations of the forces
+  // at t_n, the reactions at t_n (solved in the step before) included; the t = 0 row is the
+  // initial state. (The free accelerations are kept in `a_free` and put back, bit for bit, for
+  // the contact solve.) The penalty springs' forces are forces of the configuration u_n, like
+  // f_int: the row at t_n is observed after them.
+  Eigen::VectorXd a_free = Eigen::VectorXd::Zero(s.a.size());
   auto observe_row = [&](long n) {
-    if (!monitor.observe(s, kinetic0)) return false;
+    const bool reactions = !penalty && !contact.active.empty();
+    if (reactions) {
+      a_free = s.a;
+      add_reaction_accelerations(model, bipotential, s);
+    }
+    const bool ok = monitor.observe(s, kinetic0);
+    if (reactions) s.a = a_free;
+    if (!ok) return false;
     if (progress) progress(n, planned, s.time);
     return true;
   };

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -41,7 +42,7 @@ bool same_stencil(const Stencil& a, const Stencil& b) {
 ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
                                        const ImplicitSettings& settings)
     : model_(model), run_(run), set_(settings) {
-  s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement);
+  s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement, run.loads);
   contact_ = make_contact_set(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
   x_free_.assign(contact_.candidates.size(), {});
   weight_.assign(contact_.candidates.size(), 0.0);
@@ -123,6 +124,10 @@ void ImplicitIntegrator::constrain_matrix() {
   for (int i = 0; i < model_.num_dofs(); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
 }
 
+double ImplicitIntegrator::load_average(const NodalLoad& l) const {
+  return (1.0 - set_.xi) * l.force_at(s_.time) + set_.xi * l.force_at(s_.time + s_.dt);
+}
+
 bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (direct_) {
     factor_.solve(b, x);
@@ -151,6 +156,8 @@ double ImplicitIntegrator::residual(bool with_energy) {
   u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
   s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
   g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * impulse_;
+  // Nodal loads, xi-averaged like the other forces: dt [(1 - xi) F(t_n) + xi F(t_n+1)].
+  for (const LoadedDof& l : s_.loads) g_[l.load.dof] -= dt * load_average(l.load);
   for (const auto& p : run_.prescribed) {
     prescribed_v_[p.dof] = g_[p.dof];  // the unconstrained residual: dt times the reaction
     g_[p.dof] = 0.0;
@@ -503,6 +510,8 @@ bool ImplicitIntegrator::step(bool with_energy) {
   // contact work R.du and slip work, viscous hourglass work (same xi-average as the forces).
   for (const auto& p : run_.prescribed)
     s_.reaction_work += prescribed_v_[p.dof] / dt * (u1_[p.dof] - u0_[p.dof]);
+  // The loads' work with the force the step applied: [(1 - xi) F_n + xi F_n+1] . (u1 - u0).
+  for (const LoadedDof& l : s_.loads) s_.load_work += load_average(l.load) * (u1_[l.load.dof] - u0_[l.load.dof]);
   s_.hourglass_dissipation += dt * (xi * s_.forces.hourglass_power + (1.0 - xi) * hourglass_power0);
   // The step's contact results, from the converged reactions: the contacts with r_n > 0, their
   // statuses and forces, and their work and slip work on the step's displacement.
@@ -535,12 +544,28 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   const ThreadScope threads(settings.threads);
   RunResult result;
   result.threads = threads.threads();
-  ImplicitIntegrator integrator(model, settings, implicit);
+  // A quasi-static start (relaxation.hpp): relaxed with the semi-explicit loop and the same
+  // bi-potential contact law, the run starts from the relaxed displacement.
+  result.relaxed = settings.relaxation.enabled;
+  RunSettings relaxed;
+  bool relaxed_ok = true;
+  if (result.relaxed) {
+    relaxed = settings;
+    relaxed_ok = relax_displacement(model, settings, relaxed.initial_displacement, result.relaxation);
+  }
+  const RunSettings& run = result.relaxed ? relaxed : settings;
+  ImplicitIntegrator integrator(model, run, implicit);
   const State& s = integrator.state();
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
   const bool with_contact = !integrator.contact().candidates.empty();
-  RunMonitor monitor(model, settings, result, integrator.contact());
+  RunMonitor monitor(model, run, result, integrator.contact());
   const long planned = monitor.planned_steps();
+  if (!relaxed_ok) {
+    monitor.diverge(s, "relaxation: " + result.relaxation.reason);
+    monitor.finish(s);
+    result.direct_solver = integrator.direct_solver();
+    return result;
+  }
   for (;;) {
     const long n = s.step;
     // The Newton iterates' force passes are not states of the run: the converged state's

@@ -75,6 +75,7 @@ class ImplicitIntegrator {
 
  private:
   double residual(bool with_energy);  // G at (u1, v1) into g_, returns its relative inf-norm
+  double load_average(const NodalLoad& l) const;  // (1 - xi) F(t_n) + xi F(t_n+1) [N]
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   bool solve_contact();  // from dv_free_, fills y_ and contact_.reaction
   bool uzawa_contact(double c);        // true if it converged

@@ -18,6 +18,35 @@ struct Probe {
   int node = 0;  // global node index
 };
 
+// A quasi-static start (solver/schemes/relaxation.hpp, docs/background.md, Quasi-static start):
+// before the clock starts, the scene is brought to equilibrium under its t = 0 loads by
+// dynamic relaxation with kinetic damping (Cundall 1976; Underwood 1983), with the contact
+// treatment of the run's scheme.
+struct RelaxationSettings {
+  bool enabled = false;
+  // Converged when the force residual ||f_ext - f_int + R|| / ||f_ext|| over the free DOFs is
+  // <= tolerance and the kinetic energy is <= tolerance^2 x its peak over the relaxation.
+  double tolerance = 1e-6;  // [-]
+  long max_steps = 100000;  // relaxation steps before it is reported as not converged
+  // Step of the relaxation [s]; <= 0: relaxation_step() (relaxation.hpp), half the run's step
+  // (explicit schemes) or half of 0.9 x the elements' critical step (the implicit scheme, which
+  // relaxes with the semi-explicit loop).
+  double dt = 0.0;
+};
+
+// What the relaxation did (summary.json `relaxation`).
+struct RelaxationReport {
+  bool converged = false;
+  long steps = 0;             // relaxation steps taken
+  long velocity_resets = 0;   // kinetic-energy peaks at which all velocities were zeroed
+  double dt = 0.0;            // its step [s]
+  double residual = 0.0;      // force residual ratio at the end [-]
+  double kinetic_ratio = 0.0; // kinetic energy / its peak at the end [-]
+  double settlement = 0.0;    // largest node displacement from the start state to the relaxed one [m]
+  double wall_seconds = 0.0;  // its wall-clock time (not in the run's wall_seconds) [s]
+  std::string reason;         // why it did not converge
+};
+
 struct RunSettings {
   double dt = 0.0;                  // fixed time step [s]
   double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps
@@ -25,6 +54,8 @@ struct RunSettings {
   std::vector<double> field_times;  // field snapshots at the steps nearest these times [s]
   std::vector<Probe> probes;
   std::vector<PrescribedDof> prescribed;
+  std::vector<NodalLoad> loads;      // time-dependent nodal forces (central_difference.hpp)
+  RelaxationSettings relaxation;     // a quasi-static start (off by default)
   double energy_growth_limit = 2.0;  // diverged when total energy > limit * reference energy [-]
   int monitor_every = 50;            // divergence checks at least every this many steps
   Eigen::VectorXd initial_displacement;  // optional, 2n [m]
@@ -88,6 +119,8 @@ struct StressPeak {
 
 struct RunResult {
   RunStatus status = RunStatus::ok;
+  bool relaxed = false;            // the run started with a relaxation (`relaxation` is its report)
+  RelaxationReport relaxation;
   std::string reason;              // why a run diverged
   long diverged_step = -1;
   double diverged_time = 0.0;      // [s]
@@ -114,6 +147,13 @@ struct RunResult {
   double contact_first_time = -1.0;  // start of the first step with an active contact [s]; -1: none
   double contact_last_time = -1.0;   // end of the last step with an active contact [s]; -1: none
   double penetration_max = 0.0;    // over samples [m]
+  // Largest displacement of any node from the start state (the relaxed one after a
+  // relaxation), |u_n - u_0|, over the monitor steps [m]: over the whole run, and over the
+  // steps up to rest_until, the first time a nodal load changes (the end without such loads).
+  double displacement_max = 0.0;
+  double drift_max = 0.0;
+  int drift_node = -1;             // global node of drift_max; -1: none moved
+  double rest_until = 0.0;         // [s]
   double friction_dissipation = 0.0;  // at the end [J]
   double contact_work = 0.0;       // at the end [J]
   int contact_candidates = 0;      // boundary node-obstacle pairs watched
