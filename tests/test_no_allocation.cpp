@@ -1,6 +1,7 @@
 // The explicit step performs no heap allocation (design 4): after initial_state, any number of
 // evaluate() + update() calls, with or without energies, with prescribed DOFs, gravity and
-// every element formulation, must not allocate.
+// every element formulation, must not allocate; nor does the variable step (StepControl's
+// recomputation of the step, set_step) with either contact solve.
 //
 // Every allocation entry point of this executable is counted in one global atomic counter:
 // all replaceable global operator new / delete overloads, and also the C allocation functions
@@ -19,7 +20,10 @@
 #include <new>
 #include <vector>
 
+#include "solver/contact/bipotential_contact.hpp"
+#include "solver/contact/penalty_contact.hpp"
 #include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/time_step.hpp"
 #include "solver/observers/observers.hpp"
 #include "verification_meshes.hpp"
 
@@ -136,6 +140,59 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
       EXPECT_TRUE(std::isfinite(sink));
       EXPECT_GT(s.u.norm(), 0.0);
       EXPECT_EQ(s.step, 70);
+    }
+  }
+}
+
+// The variable step (docs/background.md, Variable time step): StepControl::begin_step, which
+// recomputes the step from the current configuration every step here and shortens the last one,
+// with evaluate(), either contact solve and update() at a step that changes every step, for
+// every element formulation, allocates nothing.
+TEST(NoAllocation, VariableStepsDoNotAllocate) {
+  for (ElementKind kind : verification::all_element_kinds()) {
+    Mesh mesh = verification::grid_mesh(0.04, 0.02, 8, 4, 0.2, kind);
+    mesh.nodes.row(1).array() += 1e-5;
+    Model model = verification::single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain),
+                                                  PlaneMode::strain, kind, 0.01, 0.1, Vec2(0.0, -9.81));
+    for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity.segment<2>(2 * i) = Vec2(1.0, -5.0);
+    const std::vector<Obstacle> line{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+    std::vector<PrescribedDof> prescribed;
+    for (int n : mesh.node_sets.at("top")) prescribed.push_back({2 * n, PrescribedDof::Kind::displacement, 1e-4, 1e-3});
+    for (bool penalty : {false, true}) {
+      RunSettings settings;
+      settings.dt_safety = 0.9;
+      settings.dt = 0.9 * model.critical_dt;
+      settings.end_time = 60.5 * settings.dt;  // about 60 steps, the last one shortened to end on it
+      settings.dt_update_interval = 1;
+      BipotentialContact b = make_bipotential_contact(model, line, {{0.3}}, prescribed);
+      PenaltyContact p = make_penalty_contact(model, line, {{0.3}}, prescribed, PenaltySettings{});
+      StepControl control(model, settings, penalty ? penalty_critical_dt(model, p) : 1e300);
+      State s = initial_state(model, prescribed, settings.dt);
+      // The first step sets up the contact solves' warm starts; count from the second.
+      ASSERT_TRUE(control.begin_step(s));
+      evaluate(model, prescribed, s, true);
+      if (penalty) penalty_phase(model, line, p, s);
+      else contact_phase(model, line, ContactSettings{}, b, s);
+      update(s);
+      const long before = g_allocations.load();
+      long steps = 0, contact_steps = 0;
+      while (control.begin_step(s)) {
+        evaluate(model, prescribed, s, steps % 3 == 0);
+        if (penalty) {
+          penalty_phase(model, line, p, s);
+          contact_steps += p.set.last.active > 0;
+        } else {
+          contact_phase(model, line, ContactSettings{}, b, s);
+          contact_steps += b.set.last.active > 0;
+        }
+        update(s);
+        ++steps;
+      }
+      EXPECT_EQ(g_allocations.load() - before, 0) << element_name(kind) << (penalty ? " penalty" : " bi-potential");
+      EXPECT_TRUE(control.failure().empty()) << control.failure();
+      EXPECT_GT(steps, 40);
+      EXPECT_EQ(s.time, settings.end_time);
+      EXPECT_GT(contact_steps, 0) << "the body reached the line";
     }
   }
 }

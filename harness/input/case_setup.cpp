@@ -269,6 +269,11 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   // It also gives the springs' own limit, which the summary reports for fixed steps too.
   const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
   s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;
+  // The variable step (explicit schemes, time.dt = "auto"): the same rule on the current
+  // configuration every dt_update_interval steps (StepControl, solver/schemes/time_step.hpp).
+  s.dt_update_interval = c.dt_update_interval;
+  s.dt_safety = c.dt_safety;
+  s.dt_min_ratio = c.dt_min_ratio;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");
