@@ -199,7 +199,8 @@ TEST(NoAllocation, VariableStepsDoNotAllocate) {
 
 // The threaded force pass (two threads, a plate of more cells than kForceParallelChunks chunks
 // hold, so the chunks run in a parallel region): after the first step, which creates the
-// OpenMP runtime's thread team once per process, no step allocates, sample passes included.
+// OpenMP runtime's thread team once per process, no step allocates, sample passes and the
+// variable step's threaded recomputation included.
 TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
   const Mesh mesh = verification::grid_mesh(2.0, 1.0, 48, 24, 0.2, ElementKind::q4_full);
   const Model model = verification::single_body_model(
@@ -213,10 +214,17 @@ TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
   VonMises2 sampled{0.0, 0.0, 0.0};
   StressTracking tracking;
   tracking.contact_cell = contact_cell.data();
+  // The variable step's recomputation on the same threads (StepControl::critical).
+  RunSettings settings;
+  settings.dt = s.dt;
+  settings.end_time = 1.0;
+  const StepControl control(model, settings, 1e300);
+  double dt_sum = 0.0;
   evaluate(model, {}, s, true, &tracking);
   update(s);
   const long before = g_allocations.load();
   for (int n = 0; n < 30; ++n) {
+    dt_sum += control.critical(s.u, nullptr, true);
     tracking.threshold = n % 2 == 0 ? 0.0 : 1e6;
     tracking.sampled_max = n % 3 == 0 ? &sampled : nullptr;
     tracking.cell_von_mises = n % 3 == 0 ? cells.data() : nullptr;
@@ -224,6 +232,7 @@ TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
     update(s);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(dt_sum, 0.0);
   EXPECT_GT(sampled[0], 0.0);
   EXPECT_GT(s.u.norm(), 0.0);
 }

@@ -10,11 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/observers/observers.hpp"
 #include "solver/schemes/explicit.hpp"
+#include "solver/schemes/threads.hpp"
 #include "solver/schemes/time_step.hpp"
 #include "verification_meshes.hpp"
 
@@ -88,6 +90,38 @@ TEST(VariableStep, CriticalStepOfTheCurrentConfiguration) {
     const double exact = rectangle_length(h, s * h) / cp;
     EXPECT_NEAR(control.critical(u), exact, 1e-14 * exact) << "s = " << s;
   }
+}
+
+TEST(VariableStep, CriticalStepIsTheSameOnTwoThreads) {
+  // The recomputation on the run's threads (each takes a share of every block) finds the same
+  // cell and step as on one, for every element type, on a deformed distorted grid and on an
+  // undeformed regular one (whose cells tie up to rounding).
+  for (ElementKind kind : verification::all_element_kinds())
+    for (double distortion : {0.2, 0.0}) {
+      SCOPED_TRACE(std::string(verification::element_name(kind)) + (distortion > 0.0 ? " distorted" : " regular"));
+      const Model model = single_body_model(grid_mesh(2.0, 1.0, 48, 24, distortion, kind),
+                                            nu_zero_rubber(PlaneMode::strain), PlaneMode::strain, kind, 0.01);
+      RunSettings settings;
+      settings.dt = model.critical_dt;
+      settings.end_time = 1.0;
+      const StepControl control(model, settings, kInf);
+      Eigen::VectorXd u(model.num_dofs());
+      for (int i = 0; i < model.num_nodes(); ++i)
+        u.segment<2>(2 * i) = distortion > 0.0 ? Vec2(1e-3 * std::sin(5.0 * model.ref(1, i)), 2e-3 * std::cos(3.0 * model.ref(0, i)))
+                                               : Vec2::Zero();
+      int serial_cell = -2, parallel_cell = -3;
+      const double serial = control.critical(u, &serial_cell, false);
+      const ThreadScope threads(2);
+      const double parallel = control.critical(u, &parallel_cell, true);
+      EXPECT_EQ(serial, parallel);
+      EXPECT_EQ(serial_cell, parallel_cell);
+      EXPECT_GT(serial, 0.0);
+      if (distortion == 0.0) {
+        // Undeformed: the model's own critical cell and step.
+        EXPECT_EQ(serial_cell, model.critical_cell);
+        EXPECT_EQ(serial, model.critical_dt);
+      }
+    }
 }
 
 // A one-cell oscillator: a Q4 (2 x 2) square of side h, bottom nodes held, top nodes moving

@@ -41,8 +41,9 @@ class StepControl {
   bool variable() const { return interval_ > 0; }
 
   // The critical step (safety 1) of the configuration u (2n) [s]; `cell`, if not null, gets the
-  // global cell that sets dt_e. 0 if a cell has L_e <= 0 (inverted).
-  double critical(const Eigen::VectorXd& u, int* cell = nullptr) const;
+  // global cell that sets dt_e (the first in cell order on ties). 0 if a cell has L_e <= 0
+  // (inverted). With `parallel`, on the OpenMP threads in force; the result is the same.
+  double critical(const Eigen::VectorXd& u, int* cell = nullptr, bool parallel = false) const;
 
   // At the top of step s.step (variable step only): false when t_n has reached end_time (the
   // state is the run's last, and s.time is set to end_time exactly). Otherwise sets the step
@@ -66,6 +67,8 @@ class StepControl {
   double safety_ = 0.9, end_ = 0.0, dt0_ = 0.0, floor_ = 0.0;
   double spring_dt_ = 0.0;
   std::array<std::vector<double>, 3> wave_speed_;  // per block of each BlockKind, c_p [m/s]
+  std::array<std::vector<double>, 3> inv_c2_;      // 1 / c_p^2 [s^2/m^2]
+  mutable std::vector<double> position_;           // critical()'s scratch: X + u (2n) [m]
   double dt_min_ = 0.0, dt_max_ = 0.0;
   long updates_ = 0, planned_ = 0;
   bool landed_ = false;  // the step just taken was shortened to end on end_time
