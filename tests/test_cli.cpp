@@ -135,6 +135,44 @@ TEST_F(CliTest, GoodCaseWritesDocumentedOutputs) {
     EXPECT_NE(summary.str().find(key), std::string::npos) << key;
 }
 
+// A variable step (time.dt = "auto", time.dt_update_interval): the history's `dt` column, the
+// summary's range, the run ending on time.end (docs/outputs.md).
+TEST_F(CliTest, VariableStepWritesItsColumnAndRange) {
+  const std::string file = write("case.toml", replace(kGood, "dt = 1e-5", "dt = \"auto\"\ndt_update_interval = 10"));
+  const Outcome o = run("run " + file + " --out " + out());
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_NE(o.output.find("(variable: "), std::string::npos) << o.output;
+  std::ifstream h(fs::path(out()) / "history.csv");
+  std::string header;
+  std::getline(h, header);
+  EXPECT_EQ(header.rfind("time,dt,kinetic_energy,", 0), 0u) << header;
+  std::string last;
+  for (std::string line; std::getline(h, line);) last = line;
+  EXPECT_EQ(last.rfind("0.001,", 0), 0u) << "the last row is at time.end: " << last;
+  std::stringstream summary;
+  summary << std::ifstream(fs::path(out()) / "summary.json").rdbuf();
+  for (const char* key : {"\"dt_update_interval\": 10", "\"dt_min\"", "\"dt_max\"", "\"dt_updates\"",
+                          "\"dt_floor\"", "\"time_reached\": 0.001,", "\"dt_mode\": \"auto\""})
+    EXPECT_NE(summary.str().find(key), std::string::npos) << key << " in " << summary.str();
+}
+
+// The variable step's keys: an integer >= 0, only with time.dt = "auto", not with the implicit
+// scheme; the floor's ratio in (0, 1].
+TEST_F(CliTest, RejectsBadVariableStep) {
+  const std::string autodt = replace(kGood, "dt = 1e-5", "dt = \"auto\"");
+  expect_rejected(replace(autodt, "[time]", "[time]\ndt_update_interval = -1"), "",
+                  {"time.dt_update_interval", "expected an integer in [0, 1000000000]; got -1"});
+  expect_rejected(replace(autodt, "[time]", "[time]\ndt_update_interval = 2.5"), "",
+                  {"time.dt_update_interval", "expected an integer"});
+  expect_rejected(autodt, "--set time.dt_update_interval=-3", {"--set time.dt_update_interval", "got -3"});
+  expect_rejected(replace(kGood, "[time]", "[time]\ndt_update_interval = 5"), "",
+                  {"time.dt_update_interval", "needs time.dt = \"auto\"", "1e-05 s"});
+  expect_rejected("scheme = \"implicit\"\n" + replace(autodt, "[time]", "[time]\ndt_update_interval = 5"), "",
+                  {"time.dt_update_interval", "implicit scheme takes a fixed step"});
+  expect_rejected(replace(autodt, "[time]", "[time]\ndt_min_ratio = 0.0"), "", {"time.dt_min_ratio", "in (0, 1]"});
+  expect_rejected(autodt, "--set time.dt_min_ratio=1.5", {"time.dt_min_ratio", "in (0, 1]"});
+}
+
 TEST_F(CliTest, SetOverridesAKey) {
   const std::string file = write("case.toml", kGood);
   const Outcome o = run("run " + file + " --out " + out() + " --set time.dt=2e-5 --set bodies[0].velocity=[0,1]");

@@ -442,7 +442,7 @@ TEST(Explicit, HistoryLayout) {
   // rounded to a step, plus the last step), probe columns equal to the probed node's state
   // from an independent evaluate/update loop (same arithmetic, so equal to a few ulps).
   const std::vector<std::string> fixed = {
-      "time",          "kinetic_energy", "strain_energy",  "hourglass_energy",
+      "time",          "dt",             "kinetic_energy", "strain_energy",  "hourglass_energy",
       "external_work", "friction_dissipation", "total_energy", "energy_error",
       "momentum_x",    "momentum_y",     "von_mises_max",  "penetration_max",
       "contact_nodes", "normal_force",   "tangential_force", "contact_work",

@@ -1,7 +1,8 @@
 // The explicit step performs no heap allocation (design 4): after initial_state, any number of
 // evaluate() + update() calls, with or without energies, with prescribed DOFs, nodal loads,
 // gravity and every element formulation, must not allocate; nor do the steps of a relaxation
-// (a quasi-static start).
+// (a quasi-static start), nor the variable step (StepControl's recomputation of the step,
+// set_step) with either contact solve.
 //
 // Every allocation entry point of this executable is counted in one global atomic counter:
 // all replaceable global operator new / delete overloads, and also the C allocation functions
@@ -20,9 +21,12 @@
 #include <new>
 #include <vector>
 
+#include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/obstacle.hpp"
+#include "solver/contact/penalty_contact.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/relaxation.hpp"
+#include "solver/schemes/time_step.hpp"
 #include "solver/observers/observers.hpp"
 #include "verification_meshes.hpp"
 
@@ -183,9 +187,63 @@ TEST(NoAllocation, RelaxationStepsDoNotAllocate) {
   }
 }
 
+// The variable step (docs/background.md, Variable time step): StepControl::begin_step, which
+// recomputes the step from the current configuration every step here and shortens the last one,
+// with evaluate(), either contact solve and update() at a step that changes every step, for
+// every element formulation, allocates nothing.
+TEST(NoAllocation, VariableStepsDoNotAllocate) {
+  for (ElementKind kind : verification::all_element_kinds()) {
+    Mesh mesh = verification::grid_mesh(0.04, 0.02, 8, 4, 0.2, kind);
+    mesh.nodes.row(1).array() += 1e-5;
+    Model model = verification::single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain),
+                                                  PlaneMode::strain, kind, 0.01, 0.1, Vec2(0.0, -9.81));
+    for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity.segment<2>(2 * i) = Vec2(1.0, -5.0);
+    const std::vector<Obstacle> line{{"ground", Vec2::Zero(), Vec2::UnitY()}};
+    std::vector<PrescribedDof> prescribed;
+    for (int n : mesh.node_sets.at("top")) prescribed.push_back({2 * n, PrescribedDof::Kind::displacement, 1e-4, 1e-3});
+    for (bool penalty : {false, true}) {
+      RunSettings settings;
+      settings.dt_safety = 0.9;
+      settings.dt = 0.9 * model.critical_dt;
+      settings.end_time = 60.5 * settings.dt;  // about 60 steps, the last one shortened to end on it
+      settings.dt_update_interval = 1;
+      BipotentialContact b = make_bipotential_contact(model, line, {{0.3}}, prescribed);
+      PenaltyContact p = make_penalty_contact(model, line, {{0.3}}, prescribed, PenaltySettings{});
+      StepControl control(model, settings, penalty ? penalty_critical_dt(model, p) : 1e300);
+      State s = initial_state(model, prescribed, settings.dt);
+      // The first step sets up the contact solves' warm starts; count from the second.
+      ASSERT_TRUE(control.begin_step(s));
+      evaluate(model, prescribed, s, true);
+      if (penalty) penalty_phase(model, line, p, s);
+      else contact_phase(model, line, ContactSettings{}, b, s);
+      update(s);
+      const long before = g_allocations.load();
+      long steps = 0, contact_steps = 0;
+      while (control.begin_step(s)) {
+        evaluate(model, prescribed, s, steps % 3 == 0);
+        if (penalty) {
+          penalty_phase(model, line, p, s);
+          contact_steps += p.set.last.active > 0;
+        } else {
+          contact_phase(model, line, ContactSettings{}, b, s);
+          contact_steps += b.set.last.active > 0;
+        }
+        update(s);
+        ++steps;
+      }
+      EXPECT_EQ(g_allocations.load() - before, 0) << element_name(kind) << (penalty ? " penalty" : " bi-potential");
+      EXPECT_TRUE(control.failure().empty()) << control.failure();
+      EXPECT_GT(steps, 40);
+      EXPECT_EQ(s.time, settings.end_time);
+      EXPECT_GT(contact_steps, 0) << "the body reached the line";
+    }
+  }
+}
+
 // The threaded force pass (two threads, a plate of more cells than kForceParallelChunks chunks
 // hold, so the chunks run in a parallel region): after the first step, which creates the
-// OpenMP runtime's thread team once per process, no step allocates, sample passes included.
+// OpenMP runtime's thread team once per process, no step allocates, sample passes and the
+// variable step's threaded recomputation included.
 TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
   const Mesh mesh = verification::grid_mesh(2.0, 1.0, 48, 24, 0.2, ElementKind::q4_full);
   const Model model = verification::single_body_model(
@@ -199,10 +257,17 @@ TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
   VonMises2 sampled{0.0, 0.0, 0.0};
   StressTracking tracking;
   tracking.contact_cell = contact_cell.data();
+  // The variable step's recomputation on the same threads (StepControl::critical).
+  RunSettings settings;
+  settings.dt = s.dt;
+  settings.end_time = 1.0;
+  const StepControl control(model, settings, 1e300);
+  double dt_sum = 0.0;
   evaluate(model, {}, s, true, &tracking);
   update(s);
   const long before = g_allocations.load();
   for (int n = 0; n < 30; ++n) {
+    dt_sum += control.critical(s.u, nullptr, true);
     tracking.threshold = n % 2 == 0 ? 0.0 : 1e6;
     tracking.sampled_max = n % 3 == 0 ? &sampled : nullptr;
     tracking.cell_von_mises = n % 3 == 0 ? cells.data() : nullptr;
@@ -210,6 +275,7 @@ TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
     update(s);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(dt_sum, 0.0);
   EXPECT_GT(sampled[0], 0.0);
   EXPECT_GT(s.u.norm(), 0.0);
 }

@@ -1,6 +1,7 @@
 // The threads of a run (solver/schemes/threads.hpp): resolve_threads() and ThreadScope, and that
 // every scheme's run uses RunSettings::threads while it runs, restores the caller's count,
-// records the count in RunResult::threads, and gives bitwise the same results for 1 and 2 threads.
+// records the count in RunResult::threads, and gives bitwise the same results for 1 and 2 threads,
+// the variable step's included.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -117,6 +118,9 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
     std::vector<std::string> set;
   };
   const std::vector<std::string> fine = {"meshes.m.nx=64", "meshes.m.ny=20", "time.end=3e-4", "time.dt=2e-6"};
+  // The variable step, recomputed every step on the run's threads (StepControl::critical).
+  const std::vector<std::string> variable = {"meshes.m.nx=64", "meshes.m.ny=20", "time.end=3e-4", "time.dt=auto",
+                                             "time.dt_update_interval=1"};
   auto with = [&](std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
     return a;
@@ -128,6 +132,8 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
       {"semi_explicit", fine},
       {"explicit_penalty", with(fine, {"bodies[0].element=q4_hourglass"})},
       {"semi_explicit", with(fine, {"meshes.m.cells=tri"})},
+      {"semi_explicit", variable},
+      {"explicit_penalty", with(variable, {"meshes.m.cells=tri"})},
   };
   for (const Variant& variant : variants) {
     const char* scheme = variant.scheme;
@@ -160,6 +166,7 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
     EXPECT_EQ(std::memcmp(&a.von_mises_max, &b.von_mises_max, sizeof(double)), 0);
     EXPECT_EQ(std::memcmp(&a.friction_dissipation, &b.friction_dissipation, sizeof(double)), 0);
     EXPECT_EQ(a.steps, b.steps);
+    EXPECT_EQ(a.dt_min, b.dt_min);
   }
   fs::remove(file);
 }

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -11,6 +12,13 @@ namespace ricochet {
 namespace {
 
 constexpr long kMaxDivisions = 100'000;
+
+// A time in seconds as the message shows it, e.g. "1e-06 s".
+std::string time_text(double t) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%g s", t);
+  return buf;
+}
 
 MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::filesystem::path& dir) {
   MeshSpec m;
@@ -405,8 +413,18 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   else
     time->text("dt", "auto");
   c.dt_safety = time->number("safety", 0.9, Range{0.0, 1.0, true, false});
+  // The variable step (docs/case-format.md, [time]): the automatic step of the explicit schemes,
+  // recomputed every this many steps from the current configuration.
+  c.dt_update_interval = static_cast<int>(time->integer("dt_update_interval", 0, 0, 1'000'000'000));
+  c.dt_min_ratio = time->number("dt_min_ratio", 0.01, Range{0.0, 1.0, true, false});
   time->finish();
   if (c.dt && *c.dt > c.end_time) time->fail("dt", "must be <= time.end");
+  if (c.dt_update_interval > 0 && c.dt)
+    time->fail("dt_update_interval", "needs time.dt = \"auto\" (a fixed time.dt is never recomputed); got " +
+                                         std::to_string(c.dt_update_interval) + " with time.dt = " + time_text(*c.dt));
+  if (c.dt_update_interval > 0 && c.scheme == Scheme::implicit)
+    time->fail("dt_update_interval", "the implicit scheme takes a fixed step; allowed: 0 with scheme = \"implicit\", "
+                                     "> 0 with \"explicit\", \"semi_explicit\" or \"explicit_penalty\"");
 
   c.sample_interval = c.end_time / 1000.0;
   if (const auto out = root.table("output")) {

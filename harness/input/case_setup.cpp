@@ -292,6 +292,11 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   s.relaxation.tolerance = c.relaxation.tolerance;
   s.relaxation.max_steps = c.relaxation.max_steps;
   s.relaxation.dt = kRelaxationStepFactor * (c.scheme == Scheme::implicit ? c.dt_safety * p.model.critical_dt : s.dt);
+  // The variable step (explicit schemes, time.dt = "auto"): the same rule on the current
+  // configuration every dt_update_interval steps (StepControl, solver/schemes/time_step.hpp).
+  s.dt_update_interval = c.dt_update_interval;
+  s.dt_safety = c.dt_safety;
+  s.dt_min_ratio = c.dt_min_ratio;
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");

@@ -162,6 +162,8 @@ struct CaseSpec {
   double end_time = 0.0;          // [s]
   std::optional<double> dt;       // [s]; absent = automatic
   double dt_safety = 0.9;         // [-]
+  int dt_update_interval = 0;     // [steps]; > 0: the automatic step recomputed every this many steps
+  double dt_min_ratio = 0.01;     // [-]; variable step: the floor, as a fraction of the first step
 
   double sample_interval = 0.0;   // [s]
   std::vector<double> field_times;  // [s]

@@ -116,6 +116,13 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["dt"] = r.dt;
   j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
   j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();
+  // The variable step (docs/outputs.md): the steps' range, the last step shortened to end on
+  // time.end aside; both dt for a fixed step.
+  j["dt_update_interval"] = r.dt_update_interval;
+  j["dt_min"] = r.dt_min;
+  j["dt_max"] = r.dt_max;
+  j["dt_updates"] = r.dt_updates;
+  j["dt_floor"] = r.dt_update_interval > 0 ? Json(r.dt_floor) : Json();
   j["critical_dt"] = pc.model.critical_dt;
   j["penalty_critical_dt"] = pc.penalty_critical_dt > 0.0 ? Json(pc.penalty_critical_dt) : Json();
   j["end_time"] = c.end_time;
@@ -227,9 +234,9 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   ci["mean"] = r.contact_sweeps_mean;
   ci["max"] = r.contact_sweeps_max;
   ci["steps_with_contact"] = r.contact_steps;
-  // The time with at least one active contact, steps x dt [s]: a contact duration that gates
-  // can compare across time steps and meshes.
-  ci["contact_time"] = static_cast<double>(r.contact_steps) * r.dt;
+  // The time with at least one active contact, steps x dt [s] (with a variable step the sum of
+  // those steps): a contact duration that gates can compare across time steps and meshes.
+  ci["contact_time"] = r.dt_update_interval > 0 ? r.contact_time : static_cast<double>(r.contact_steps) * r.dt;
   ci["unconverged_steps"] = r.contact_unconverged_steps;
   ci["candidates"] = r.contact_candidates;
   j["contact_iterations"] = ci;
@@ -295,6 +302,10 @@ std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const s
                 r.steps, r.dt, pc.model.num_cells(), r.wall_seconds, r.element_steps_per_second,
                 r.energy_error_max, r.penetration_max, r.von_mises_max);
   std::string s = buf;
+  if (r.dt_update_interval > 0) {
+    std::snprintf(buf, sizeof buf, " (variable: %.4g ... %.4g s)", r.dt_min, r.dt_max);
+    s.insert(s.find(" s  ", s.find(" steps of ")) + 2, buf);
+  }
   if (r.status == RunStatus::diverged) s += "  (" + r.reason + ")";
   return s + "  -> " + dir;
 }

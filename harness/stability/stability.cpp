@@ -71,6 +71,8 @@ PreparedCase stability_trial_case(const PreparedCase& pc, double dt, const Stabi
   PreparedCase t = pc;
   t.settings.dt = dt;
   t.spec.dt = dt;
+  t.settings.dt_update_interval = 0;  // a trial's step is fixed
+  t.spec.dt_update_interval = 0;
   if (opt.end_time) {
     t.settings.end_time = *opt.end_time;
     t.spec.end_time = *opt.end_time;

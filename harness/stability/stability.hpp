@@ -63,7 +63,7 @@ struct StabilityResult {
 // with obstacles 1 / sqrt(1/dt_e^2 + 1/dt_p^2) (docs/case-format.md, [time]) [s].
 double stability_estimate(const PreparedCase& pc);
 
-// The case as one trial runs it: a copy with time.dt = dt (fixed), time.end = opt.end_time
+// The case as one trial runs it: a copy with time.dt = dt (fixed, never recomputed), time.end = opt.end_time
 // if given, and no field snapshots.
 PreparedCase stability_trial_case(const PreparedCase& pc, double dt, const StabilityOptions& opt);
 

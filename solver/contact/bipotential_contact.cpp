@@ -80,10 +80,15 @@ void add_reaction_accelerations(const Model& model, const BipotentialContact& b,
 void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
                    const ContactSettings& set, BipotentialContact& b, State& s) {
   ContactSet& c = b.set;
-  const double dt = s.dt;
+  // dt = dt_{n+1/2} (t_n to t_n+1) and dt_n = (dt_{n-1/2} + dt_{n+1/2}) / 2, over which a_n acts
+  // on the velocity (central_difference.hpp); both are dt for a fixed step. A reaction r on a
+  // node of mass m moves v_{n+1/2} by dt_n r / m and x_{n+1} by dt dt_n r / m: the local
+  // compliance is w = dt dt_n / m at position level, dt_n / m at velocity level
+  // (docs/background.md, Variable time step).
+  const double dt = s.dt, dt_n = velocity_step(s);
   const bool position = set.level == ContactLevel::position;
   // Free motion to t+dt: v_{n+1/2} without contact and the predicted position.
-  auto v_free = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt * s.a.segment<2>(2 * j); };
+  auto v_free = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt_n * s.a.segment<2>(2 * j); };
   auto predicted = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j) + dt * v_free(j); };
   update_boxes(c, predicted);
   begin_step(c);
@@ -105,7 +110,7 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
     for (int j = 0; j < st.count; ++j) {
       const int node = st.node[j];
       v_rel += st.coef[j] * v_free(node);
-      const double wj = position ? dt * dt / model.mass[2 * node] : dt / model.mass[2 * node];
+      const double wj = position ? dt * dt_n / model.mass[2 * node] : dt_n / model.mass[2 * node];
       st.factor[j] = st.coef[j] * wj;
       w += st.coef[j] * st.factor[j];
       b.node_reaction[node].setZero();
@@ -132,13 +137,13 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
   add_reaction_accelerations(model, b, s);
   for (int k : c.active) record(c, k, classify(c.reaction[k], c.candidates[k].friction_coeff));
-  // Work with the final reactions: dt R.v_n with v_n = v_{n-1/2} + dt/2 a_n, exactly the change
-  // of the half-step kinetic energy 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2 that R causes (a node
-  // stopped dead loses 1/2 m v^2); slip work -r_t times the slip increment dt t.v_{n+1/2} of the
-  // step (>= 0 by the cone). Between bodies both are sums over the stencil.
-  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
-  auto v_next = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt * s.a.segment<2>(2 * j); };
-  for (int k : c.active) record_work(c, k, dt, v_mid, true, v_next);
+  // Work with the final reactions: dt_n R.v with v = v_{n-1/2} + dt_n/2 a_n (v_n for a fixed
+  // step), exactly the change of the half-step kinetic energy 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2
+  // that R causes (a node stopped dead loses 1/2 m v^2); slip work -r_t times the slip increment
+  // dt t.v_{n+1/2} of the step (>= 0 by the cone). Between bodies both are sums over the stencil.
+  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt_n * s.a.segment<2>(2 * j); };
+  auto v_next = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt_n * s.a.segment<2>(2 * j); };
+  for (int k : c.active) record_work(c, k, dt_n, v_mid, true, v_next, dt);
   finish_step(c, sweeps, converged);
 }
 

@@ -214,12 +214,13 @@ inline void add_dissipation(ContactSet& c, int k, double work) {
 
 // Work of active contact k's reaction F = r_n n + r_t t over the step: scale * sum_j coef_j F .
 // work_motion(j) over its stencil (the normal part likewise), and with `slip` its slip work
-// -r_t scale t . sum_j coef_j slip_motion(j) added to the friction dissipation. The explicit
-// schemes measure the work on v_n dt (scale dt, work_motion = v_n) and the slip on
-// v_{n+1/2} dt; the implicit one on the step's displacement (scale 1, both u_{n+1} - u_n).
+// -r_t slip_scale t . sum_j coef_j slip_motion(j) added to the friction dissipation. The explicit
+// schemes measure the work on v dt_n (scale dt_n, work_motion = v_{n-1/2} + dt_n/2 a_n, v_n for
+// a fixed step) and the slip on v_{n+1/2} dt_{n+1/2} (slip_scale dt_{n+1/2}; central_difference.hpp);
+// the implicit one on the step's displacement (scale 1, both u_{n+1} - u_n).
 template <class WorkMotion, class SlipMotion>
 void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_motion, bool slip,
-                 const SlipMotion& slip_motion) {
+                 const SlipMotion& slip_motion, double slip_scale) {
   const Stencil& st = c.stencil[k];
   const Vec2 n = c.normal[k], t{n.y(), -n.x()};
   const LocalPair r = c.reaction[k];
@@ -233,10 +234,16 @@ void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_moti
     work += (st.coef[j] * force).dot(d);
     work_normal += st.coef[j] * r.n * n.dot(d);
   }
-  if (slip) add_dissipation(c, k, -r.t * scale * t.dot(relative));
+  if (slip) add_dissipation(c, k, -r.t * slip_scale * t.dot(relative));
   c.total.contact_work += scale * work;
   c.total.contact_work_normal += scale * work_normal;
   c.interface_total[c.interface[k]].contact_work += scale * work;
+}
+// The same with slip_scale = scale.
+template <class WorkMotion, class SlipMotion>
+void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_motion, bool slip,
+                 const SlipMotion& slip_motion) {
+  record_work(c, k, scale, work_motion, slip, slip_motion, scale);
 }
 
 // End of a step: the active count and the run totals. `iterations` and `converged` describe the

@@ -107,9 +107,7 @@ double penalty_critical_dt(const Model& model, const PenaltyContact& p) {
 }
 
 double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p) {
-  const double de = model.critical_dt, dp = penalty_critical_dt(model, p);
-  if (!std::isfinite(dp)) return de;
-  return 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp));
+  return combined_critical_dt(model.critical_dt, penalty_critical_dt(model, p));
 }
 
 double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety) {
@@ -160,14 +158,15 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
       // |f_t| <= mu f_n (f_n = 0 when open, which returns the spring to zero).
       // For a line t . x_{n-1} is the value stored last step, bit for bit; for a curved
       // obstacle it projects the increment on the current tangent.
-      // Between bodies the increment is the relative one, dt t . sum_j coef_j v_{n-1/2,j}.
+      // Between bodies the increment is the relative one over the last step,
+      // dt_{n-1/2} t . sum_j coef_j v_{n-1/2,j}.
       double ds = 0.0;
       if (!first && cc.pair < 0) {
         ds = t.dot(x) - t.dot(p.last_position[k]);
       } else if (!first) {
         Vec2 dv = Vec2::Zero();
         for (int j = 0; j < st.count; ++j) dv += st.coef[j] * s.v_half.segment<2>(2 * st.node[j]);
-        ds = s.dt * t.dot(dv);
+        ds = s.dt_prev * t.dot(dv);
       }
       p.last_position[k] = x;
       const double old = c.reaction[k].t;
@@ -194,10 +193,11 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
   }
   c.last.stored_energy = p.normal_energy + p.tangential_energy;
   p.penetration = depth;
-  // Work of the penalty forces, dt F . v_n with v_n = v_{n-1/2} + dt/2 a_n and the final a_n:
-  // the change of the half-step kinetic energy that F causes (as contact_phase records it). The
+  // Work of the penalty forces, dt_n F . v with v = v_{n-1/2} + dt_n/2 a_n (v_n for a fixed
+  // step; dt_n = (dt_{n-1/2} + dt_{n+1/2}) / 2, central_difference.hpp) and the final a_n: the
+  // change of the half-step kinetic energy that F causes (as contact_phase records it). The
   // friction dissipation is the return map's, above.
-  const double dt = s.dt;
+  const double dt = velocity_step(s);
   auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
   for (int k : c.active) record_work(c, k, dt, v_mid, false, v_mid);
   finish_step(c, 0, true);

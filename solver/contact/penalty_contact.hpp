@@ -51,6 +51,7 @@
 //   f_t,old^2 / (2 k) goes to D, less the work of the step.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "solver/contact/contact_set.hpp"
@@ -105,6 +106,13 @@ double penalty_critical_dt(const Model& model, const PenaltyContact& p);
 // dt_e and dt_p both bounds dt_c is one too. min(dt_e, dt_p) is not: near dt_e = dt_p the
 // coupled system is up to sqrt(2) faster (see tests/test_penalty_contact.cpp, PenaltyTimeStep).
 double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p);
+
+// The combination above of an element limit dt_e and a spring limit dt_p; dt_e when dt_p is
+// not finite (no springs) [s].
+inline double combined_critical_dt(double dt_e, double dt_p) {
+  if (!std::isfinite(dt_p)) return dt_e;
+  return 1.0 / std::sqrt(1.0 / (dt_e * dt_e) + 1.0 / (dt_p * dt_p));
+}
 
 // safety * penalty_combined_critical_dt: the fixed step of a penalty run [s]. Stable is not
 // accurate: when the springs set the step (f_si >~ 3 on square cells), an impact at 0.9 x the

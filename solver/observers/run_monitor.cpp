@@ -117,6 +117,7 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   auto of = [x](auto get) { return x ? get(*x) : 0.0; };
   using X = HistoryInputs;
   fn("time", of([](const X& h) { return h.s.time; }));
+  fn("dt", of([](const X& h) { return h.s.dt; }));
   fn("kinetic_energy", of([](const X& h) { return h.e.kinetic; }));
   fn("strain_energy", of([](const X& h) { return h.e.strain; }));
   fn("hourglass_energy", of([](const X& h) { return h.e.hourglass; }));
@@ -171,20 +172,36 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   result.dt = settings.dt;
   planned_ = static_cast<long>(std::ceil(settings.end_time / settings.dt - 1e-9));
   result.planned_steps = planned_;
-  samples_ = sample_steps(settings, planned_);
-  for (double t : settings.field_times) {
-    const long n = std::lround(t / settings.dt);
-    if (n >= 0 && n <= planned_) field_steps_.push_back(n);  // times after the end are skipped
-  }
-  std::sort(field_steps_.begin(), field_steps_.end());
-  field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
   result.history.columns =
       history_columns(settings.probes, contact.candidates.empty()
                                            ? std::vector<std::string>{}
                                            : contact_interface_names(settings.obstacles, settings.body_pairs));
-  result.history.values.reserve(samples_.size() * result.history.columns.size());
-  result.fields.reserve(field_steps_.size());
-  if (!field_steps_.empty()) field_cells_.assign(model.num_cells(), 0.0);
+  variable_ = settings.dt_update_interval > 0;
+  if (!variable_) {
+    samples_ = sample_steps(settings, planned_);
+    for (double t : settings.field_times) {
+      const long n = std::lround(t / settings.dt);
+      if (n >= 0 && n <= planned_) field_steps_.push_back(n);  // times after the end are skipped
+    }
+    std::sort(field_steps_.begin(), field_steps_.end());
+    field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
+    result.history.values.reserve(samples_.size() * result.history.columns.size());
+    result.fields.reserve(field_steps_.size());
+    if (!field_steps_.empty()) field_cells_.assign(model.num_cells(), 0.0);
+  } else {
+    // By time (plan_step). Rows: one per sample time and the last state; sampling every step
+    // (interval 0), twice the steps at the first step, beyond which the rows grow
+    // geometrically (the step floor bounds their number: time.dt_min_ratio).
+    for (double t : settings.field_times)
+      if (t >= 0.0 && t <= settings.end_time * (1.0 + 1e-9)) field_times_.push_back(t);
+    std::sort(field_times_.begin(), field_times_.end());
+    field_times_.erase(std::unique(field_times_.begin(), field_times_.end()), field_times_.end());
+    const double rows = settings.sample_interval > 0.0 ? std::floor(settings.end_time / settings.sample_interval) + 2.0
+                                                       : 2.0 * static_cast<double>(planned_) + 2.0;
+    result.history.values.reserve(static_cast<std::size_t>(std::min(rows, 1e7)) * result.history.columns.size());
+    result.fields.reserve(field_times_.size() + 1);
+    if (!field_times_.empty()) field_cells_.assign(model.num_cells(), 0.0);
+  }
   monitor_every_ = std::max(1, settings.monitor_every);
   contact_cell_ = contact_boundary_cells(model, settings, contact.candidates);
   tracking_.contact_cell = contact_cell_.data();
@@ -200,9 +217,44 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   cpu0_ = std::clock();
 }
 
+bool RunMonitor::sample_at(long n) const {
+  if (variable_) return n == planned_step_ && planned_sample_;
+  return next_sample_ < samples_.size() && samples_[next_sample_] == n;
+}
+
+bool RunMonitor::field_at(long n) const {
+  if (variable_) return n == planned_step_ && planned_field_;
+  return next_field_ < field_steps_.size() && field_steps_[next_field_] == n;
+}
+
+bool RunMonitor::is_last_step(long n) const { return variable_ ? n == planned_step_ && planned_last_ : n == planned_; }
+
+void RunMonitor::plan_step(const State& s, bool last) {
+  planned_step_ = s.step;
+  planned_last_ = last;
+  // Times before the midpoint of the step from t_n (all that are left at the last state) go to
+  // t_n; the next ones are then after it.
+  const double mid = s.time + 0.5 * s.dt;
+  const double every = settings_.sample_interval;
+  if (every > 0.0) {
+    planned_sample_ = last || static_cast<double>(next_sample_k_) * every < mid;
+    if (planned_sample_ && !last) {
+      next_sample_k_ = std::max(next_sample_k_ + 1, static_cast<long>(std::ceil(mid / every)));
+      while (static_cast<double>(next_sample_k_) * every < mid) ++next_sample_k_;
+    }
+  } else {
+    planned_sample_ = true;  // every step
+  }
+  planned_field_ = false;
+  while (next_field_ < field_times_.size() && (last || field_times_[next_field_] < mid)) {
+    planned_field_ = true;
+    ++next_field_;
+  }
+}
+
 const StressTracking* RunMonitor::stress_tracking(long n) {
-  const bool sample = next_sample_ < samples_.size() && samples_[next_sample_] == n;
-  const bool field = next_field_ < field_steps_.size() && field_steps_[next_field_] == n;
+  const bool sample = sample_at(n);
+  const bool field = field_at(n);
   if (!sample && !field && !settings_.stress_every_step) return nullptr;
   const double peak = result_.von_mises_interior_peak.value;
   // A field snapshot between samples without per-step tracking ranks nothing: von_mises_max
@@ -239,20 +291,19 @@ void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
   }
 }
 
-void RunMonitor::contact_step(double t_begin, double dt) {
+void RunMonitor::contact_step(double t_begin, double dt, double impulse_dt) {
   const ContactStep& c = contact_.last;
-  result_.contact_impulse_normal += c.normal_force * dt;
-  result_.contact_impulse_tangential += c.tangential_force * dt;
+  result_.contact_impulse_normal += c.normal_force * impulse_dt;
+  result_.contact_impulse_tangential += c.tangential_force * impulse_dt;
   if (c.active > 0) {
     if (result_.contact_first_time < 0.0) result_.contact_first_time = t_begin;
     result_.contact_last_time = t_begin + dt;
+    result_.contact_time += dt;
   }
 }
 
 bool RunMonitor::is_monitor_step(long n) const {
-  return (next_sample_ < samples_.size() && samples_[next_sample_] == n) ||
-         (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) ||
-         n % monitor_every_ == 0 || n == planned_;
+  return sample_at(n) || field_at(n) || n % monitor_every_ == 0 || is_last_step(n);
 }
 
 void RunMonitor::diverge(const State& s, std::string reason) {
@@ -307,7 +358,7 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
   balance.strain += c.stored_energy;
   const double error = energy_error(balance, result_.initial_energy, reference_energy_);
 
-  if (next_sample_ < samples_.size() && samples_[next_sample_] == n) {
+  if (sample_at(n)) {
     if (sampled_step_ != n) throw std::logic_error("RunMonitor: a history sample without its stress pass");
     const double vm = std::sqrt(last_peaks_.all);
     VonMises2 sampled = sampled_vm2_;  // of this step's force (or stress) pass
@@ -330,9 +381,10 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     }
     result_.energy_error_max = std::max(result_.energy_error_max, error);
     result_.penetration_max = std::max(result_.penetration_max, depth);
-    ++next_sample_;
+    if (variable_) planned_sample_ = false;
+    else ++next_sample_;
   }
-  if (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) {
+  if (field_at(n)) {
     FieldSnapshot f;
     f.step = n;
     f.time = s.time;
@@ -342,7 +394,8 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     if (sampled_step_ != n) throw std::logic_error("RunMonitor: a field snapshot without its stress pass");
     f.von_mises = field_cells_;  // of this step's force (or stress) pass
     result_.fields.push_back(std::move(f));
-    ++next_field_;
+    if (variable_) planned_field_ = false;
+    else ++next_field_;
   }
   return true;
 }

@@ -22,6 +22,17 @@ class RunMonitor {
   long planned_steps() const { return planned_; }
   bool is_monitor_step(long n) const;
 
+  // Variable step (RunSettings::dt_update_interval > 0), where the schedule is by time: at the
+  // top of every step, once the step from t_n is set in s.dt, whether the state at t_n is a
+  // history sample or a field snapshot. A time T goes to the step nearest it, t_n with
+  // T < t_n + dt/2 (half-way ties to the later step, as the fixed step's rounding does); the
+  // run's last state (`last`: t_n = end_time, no step follows) is always a sample and takes the
+  // field times up to end_time. With a fixed step the schedule is of step indices, made once,
+  // and this is not called.
+  void plan_step(const State& s, bool last);
+  // The run's last step: the planned one (fixed step), or the one plan_step() was told.
+  bool is_last_step(long n) const;
+
   // At a monitor step: energies from s (after an evaluate with energy), divergence checks,
   // the history row and field snapshot when scheduled. Returns false if the run diverged.
   // `kinetic0` is the kinetic energy of the initial conditions (used at n = 0).
@@ -44,8 +55,11 @@ class RunMonitor {
   void track_stress(const State& s, const StressPeaks& peaks);
 
   // Every step whose contact forces (the contact set's last step) act over [t_begin, t_begin + dt]:
-  // accumulates the contact impulses and the first and last contact times.
-  void contact_step(double t_begin, double dt);
+  // accumulates the contact impulses (force x impulse_dt: the time over which the forces change
+  // the velocity, dt_n of central_difference.hpp; dt for a fixed step), the first and last
+  // contact times and the time in contact.
+  void contact_step(double t_begin, double dt, double impulse_dt);
+  void contact_step(double t_begin, double dt) { contact_step(t_begin, dt, dt); }
 
   // Records a divergence found by the scheme itself (e.g. det F <= 0, a failed solve).
   void diverge(const State& s, std::string reason);
@@ -64,6 +78,14 @@ class RunMonitor {
   long planned_ = 0;
   std::vector<long> samples_, field_steps_;
   std::size_t next_sample_ = 0, next_field_ = 0;
+  bool sample_at(long n) const;
+  bool field_at(long n) const;
+  // Variable step: the schedule by time (plan_step).
+  bool variable_ = false;
+  std::vector<double> field_times_;  // ascending, up to end_time [s]
+  long next_sample_k_ = 0;           // the next sample time is next_sample_k_ x sample_interval
+  long planned_step_ = -1;           // the step plan_step() was last called for
+  bool planned_sample_ = false, planned_field_ = false, planned_last_ = false;
   long monitor_every_ = 1;
   Eigen::VectorXd u0_;
   double reference_energy_ = 0.0;  // max(E_0, |W_ext|): the energy-error denominator

@@ -29,10 +29,12 @@ void accelerations(long i0, long i1, double* __restrict a, const double* __restr
   for (long i = i0; i < i1; ++i) a[i] = inv_mass[i] * (f_ext[i] - f_int[i]);
 }
 
-// v_{n+1/2} = v_{n-1/2} + dt a_n, u_{n+1} = u_n + dt v_{n+1/2} on DOFs i0 <= i < i1.
-void advance(long i0, long i1, double dt, double* __restrict v, double* __restrict u, const double* __restrict a) {
+// v_{n+1/2} = v_{n-1/2} + dt_n a_n, u_{n+1} = u_n + dt v_{n+1/2} on DOFs i0 <= i < i1
+// (dt_n = dt for a fixed step).
+void advance(long i0, long i1, double dt_n, double dt, double* __restrict v, double* __restrict u,
+             const double* __restrict a) {
   for (long i = i0; i < i1; ++i) {
-    v[i] += dt * a[i];
+    v[i] += dt_n * a[i];
     u[i] += dt * v[i];
   }
 }
@@ -44,6 +46,7 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
   const int n = model.num_dofs();
   State s;
   s.dt = dt;
+  s.dt_prev = dt;
   s.u = initial_displacement.size() == n ? initial_displacement : Eigen::VectorXd::Zero(n);
   s.v_half = model.initial_velocity;
   s.a = Eigen::VectorXd::Zero(n);
@@ -81,10 +84,14 @@ void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, 
     l.u_last = s.u[d];
     s.a[d] += model.inv_mass[d] * f;
   }
-  s.hourglass_dissipation += s.dt * s.forces.hourglass_power;
-  if (s.step == 0) s.v_half -= 0.5 * s.dt * s.a;
+  // The hourglass forces of t_n act on the velocity over dt_n.
+  const double dt_n = velocity_step(s);
+  s.hourglass_dissipation += dt_n * s.forces.hourglass_power;
+  if (s.step == 0) s.v_half -= 0.5 * s.dt_prev * s.a;
   // Prescribed DOFs: the acceleration that lands v_{n+1/2} on its prescribed value; the
-  // reaction R = m (a - a_free) works at the rate R v_n.
+  // reaction R = m (a - a_free) works at the rate R v_n, v_n = v_{n-1/2} + dt_{n-1/2}/2 a (the
+  // mean of the half steps' velocities when the step is fixed).
+  const bool fixed = s.dt_prev == s.dt;
   double power = 0.0;
   for (const auto& p : prescribed) {
     const int d = p.dof;
@@ -93,20 +100,23 @@ void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, 
             ? p.value
             : (p.displacement_at(s.time + s.dt) - s.u[d]) / s.dt;
     if (s.step == 0) s.v_half[d] = v_next;
-    const double a = (v_next - s.v_half[d]) / s.dt;
+    const double a = (v_next - s.v_half[d]) / dt_n;
     const double reaction = model.mass[d] * (a - s.a[d]);
     s.a[d] = a;
-    power += reaction * 0.5 * (s.v_half[d] + v_next);
+    const double v_n = fixed ? 0.5 * (s.v_half[d] + v_next) : s.v_half[d] + 0.5 * s.dt_prev * a;
+    power += reaction * v_n;
   }
-  if (s.step > 0) s.reaction_work += 0.5 * s.dt * (s.reaction_power + power);
+  // Trapezoidal rule over [t_n-1, t_n], of length dt_{n-1/2}.
+  if (s.step > 0) s.reaction_work += 0.5 * s.dt_prev * (s.reaction_power + power);
   s.reaction_power = power;
 }
 
 void update(State& s) {
-  const double dt = s.dt;
-  for_dof_ranges(s, [&](long i0, long i1) { advance(i0, i1, dt, s.v_half.data(), s.u.data(), s.a.data()); });
+  const double dt = s.dt, dt_n = velocity_step(s);
+  for_dof_ranges(s, [&](long i0, long i1) { advance(i0, i1, dt_n, dt, s.v_half.data(), s.u.data(), s.a.data()); });
   ++s.step;
-  s.time = static_cast<double>(s.step) * s.dt;
+  s.dt_prev = dt;
+  s.time = s.time_base + static_cast<double>(s.step - s.step_base) * s.dt;
 }
 
 }  // namespace ricochet

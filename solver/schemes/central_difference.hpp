@@ -1,6 +1,11 @@
 // Central-difference explicit integration with a lumped mass (docs/background.md, Central
-// differences with a lumped mass, steps 1, 2, 5):
-//   a_n = M^-1 (f_ext - f_int(u_n)),  v_{n+1/2} = v_{n-1/2} + dt a_n,  u_{n+1} = u_n + dt v_{n+1/2}.
+// differences with a lumped mass, steps 1, 2, 5), with a step that may change from one step to
+// the next (docs/background.md, Variable time step):
+//   a_n = M^-1 (f_ext - f_int(u_n)),
+//   v_{n+1/2} = v_{n-1/2} + dt_n a_n,   dt_n = (dt_{n-1/2} + dt_{n+1/2}) / 2,
+//   u_{n+1} = u_n + dt_{n+1/2} v_{n+1/2},
+// dt_{n+1/2} = t_{n+1} - t_n the step taken from t_n (State::dt) and dt_{n-1/2} the one that
+// led to t_n (State::dt_prev). With a fixed step dt_n = dt_{n+1/2} = dt, bit for bit.
 // The step is split into phases so a scheme can act between them (contact, from the next
 // schemes on) and observers can read the state at t_n: evaluate() then update().
 #pragma once
@@ -54,7 +59,12 @@ struct LoadedDof {
 struct State {
   long step = 0;
   double time = 0.0;     // t_n [s]
-  double dt = 0.0;       // [s]
+  double dt = 0.0;       // dt_{n+1/2}, the step from t_n to t_n+1 [s]
+  double dt_prev = 0.0;  // dt_{n-1/2}, the step that led to t_n (= dt at n = 0) [s]
+  // t_n = time_base + (step - step_base) dt: the time and step at the last change of dt
+  // (set_step), so that a fixed step keeps t_n = n dt.
+  double time_base = 0.0;  // [s]
+  long step_base = 0;
   Eigen::VectorXd u;       // u_n [m]
   Eigen::VectorXd v_half;  // v_{n-1/2} (v_0 before the first evaluate) [m/s]
   Eigen::VectorXd a;       // a_n after evaluate() [m/s^2]
@@ -82,18 +92,33 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 // Phase 1 of step n: f_int(u_n), free accelerations with the nodal loads F(t_n), then the
 // prescribed DOFs' accelerations and the work of their reactions, accumulated by the
 // trapezoidal rule in time (the rule under which 1/2 v_n^T M v_n changes by the work of the
-// forces, to O(dt^2)). At n = 0 also sets v_{-1/2} = v_0 - dt/2 a_0.
+// forces, to O(dt^2)). At n = 0 also sets v_{-1/2} = v_0 - dt_{-1/2}/2 a_0. Uses s.dt
+// (dt_{n+1/2}): change it with set_step() before.
 // With `stress` (internal_forces()) the pass also ranks the step's stresses. The force pass is
 // the threaded one (s.force_scratch), on the OpenMP threads in force.
 void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
               bool with_energy, const StressTracking* stress = nullptr);
 
-// Phase 2: v_{n+1/2} = v_{n-1/2} + dt a_n, u_{n+1} = u_n + dt v_{n+1/2}, t = (n+1) dt.
+// Phase 2: v_{n+1/2} = v_{n-1/2} + dt_n a_n, u_{n+1} = u_n + dt_{n+1/2} v_{n+1/2},
+// t_{n+1} = t_n + dt_{n+1/2}; dt_prev becomes dt.
 void update(State& s);
 
-// Velocity at t_n, v_n = v_{n-1/2} + dt/2 a_n, of one DOF (valid after evaluate()).
+// Makes dt the step from t_n, dt_{n+1/2} (before evaluate() of step n); at n = 0 also dt_{-1/2}.
+inline void set_step(State& s, double dt) {
+  s.time_base = s.time;
+  s.step_base = s.step;
+  s.dt = dt;
+  if (s.step == 0) s.dt_prev = dt;
+}
+
+// dt_n = (dt_{n-1/2} + dt_{n+1/2}) / 2: the time over which a_n changes the velocity,
+// v_{n+1/2} - v_{n-1/2} = dt_n a_n [s]. dt itself for a fixed step.
+inline double velocity_step(const State& s) { return 0.5 * (s.dt_prev + s.dt); }
+
+// Velocity at t_n, v_n = v_{n-1/2} + dt_{n-1/2}/2 a_n, of one DOF (valid after evaluate()):
+// v_{n+1} - v_n = dt_{n+1/2} (a_n + a_{n+1}) / 2, the trapezoidal rule over each step.
 inline double velocity_at_step(const State& s, int dof) {
-  return s.v_half[dof] + 0.5 * s.dt * s.a[dof];
+  return s.v_half[dof] + 0.5 * s.dt_prev * s.a[dof];
 }
 
 // Fixed-step estimate: safety * min over cells of L_e / c_p (docs/background.md, Critical time

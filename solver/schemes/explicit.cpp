@@ -1,10 +1,13 @@
 #include "solver/schemes/explicit.hpp"
 
+#include <limits>
+
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
 #include "solver/observers/run_monitor.hpp"
 #include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
+#include "solver/schemes/time_step.hpp"
 
 namespace ricochet {
 
@@ -39,7 +42,10 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
                            {with_contact && !penalty ? &bipotential : nullptr, with_contact && penalty ? &springs : nullptr},
                            s, result.relaxation);
   RunMonitor monitor(model, settings, result, contact);
-  const long planned = monitor.planned_steps();
+  // The variable step (settings.dt_update_interval > 0; time_step.hpp): the springs' limit
+  // enters it as it entered the first step.
+  StepControl steps(model, settings,
+                    penalty ? penalty_critical_dt(model, springs) : std::numeric_limits<double>::infinity());
   if (!relaxed_ok) {
     monitor.diverge(s, "relaxation: " + result.relaxation.reason);
     monitor.finish(s);
@@ -64,11 +70,12 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
     const bool ok = monitor.observe(s, kinetic0);
     if (reactions) s.a = a_free;
     if (!ok) return false;
-    if (progress) progress(n, planned, s.time);
+    if (progress) progress(n, steps.planned_steps(), s.time);
     return true;
   };
   for (;;) {
     const long n = s.step;
+    if (steps.variable()) monitor.plan_step(s, !steps.begin_step(s));
     const bool observe = monitor.is_monitor_step(n);
     const StressTracking* tracking = monitor.stress_tracking(n);
     evaluate(model, settings.prescribed, s, observe, tracking);
@@ -76,20 +83,26 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");
       break;
     }
+    if (!steps.failure().empty()) {
+      monitor.diverge(s, steps.failure());
+      break;
+    }
     if (tracking) monitor.track_stress(s, s.forces.stress);
     if (penalty) {
       if (with_contact) penalty_phase(model, settings.obstacles, springs, s);
       if (observe && !observe_row(n)) break;
-      if (n == planned) break;
+      if (monitor.is_last_step(n)) break;
     } else {
       if (observe && !observe_row(n)) break;
-      if (n == planned) break;
+      if (monitor.is_last_step(n)) break;
       if (with_contact) contact_phase(model, settings.obstacles, settings.contact, bipotential, s);
     }
-    if (with_contact) monitor.contact_step(s.time, s.dt);  // its forces act over [t_n, t_n+1]
+    // Its forces act over [t_n, t_n+1] and change the velocity over dt_n.
+    if (with_contact) monitor.contact_step(s.time, s.dt, velocity_step(s));
     update(s);
   }
   monitor.finish(s);
+  steps.report(result);
   return result;
 }
 

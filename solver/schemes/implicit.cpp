@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "solver/observers/run_monitor.hpp"
 #include "solver/schemes/relaxation.hpp"
@@ -540,6 +541,8 @@ bool ImplicitIntegrator::step(bool with_energy) {
 
 RunResult run_implicit(const Model& model, const RunSettings& settings, const ImplicitSettings& implicit,
                        const ProgressFn& progress) {
+  if (settings.dt_update_interval != 0)
+    throw std::invalid_argument("implicit scheme: the step is fixed (dt_update_interval must be 0)");
   // The whole run, the integrator's set-up included, uses the run's thread count.
   const ThreadScope threads(settings.threads);
   RunResult result;

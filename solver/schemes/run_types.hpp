@@ -48,8 +48,16 @@ struct RelaxationReport {
 };
 
 struct RunSettings {
-  double dt = 0.0;                  // fixed time step [s]
-  double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps
+  double dt = 0.0;                  // fixed time step [s]; with a variable step, the first one
+  double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps (fixed step)
+  // Variable step (time.dt_update_interval; docs/background.md, Variable time step): with
+  // dt_update_interval = N > 0 the explicit loop (run_explicit) sets the step every N steps to
+  // dt_safety x the critical step of the current configuration (StepControl, time_step.hpp),
+  // shortens the last step to end on end_time, and samples the history and fields by time.
+  // 0: the step stays dt. The implicit scheme takes a fixed step only (it rejects N > 0).
+  int dt_update_interval = 0;       // [steps]
+  double dt_safety = 0.9;           // [-]
+  double dt_min_ratio = 0.01;       // a recomputed step below dt_min_ratio x dt is a divergence [-]
   double sample_interval = 0.0;     // history sampling [s]; <= 0 samples every step
   std::vector<double> field_times;  // field snapshots at the steps nearest these times [s]
   std::vector<Probe> probes;
@@ -124,9 +132,14 @@ struct RunResult {
   std::string reason;              // why a run diverged
   long diverged_step = -1;
   double diverged_time = 0.0;      // [s]
-  double dt = 0.0;                 // [s]
+  double dt = 0.0;                 // [s]; with a variable step, the first one
   long steps = 0;                  // steps taken
-  long planned_steps = 0;
+  long planned_steps = 0;          // ceil(end_time / dt); with a variable step an estimate
+  int dt_update_interval = 0;      // RunSettings::dt_update_interval (0: fixed step)
+  double dt_min = 0.0, dt_max = 0.0;  // smallest and largest step taken, a last step shortened to end on end_time aside [s]
+  long dt_updates = 0;             // recomputations of the step (variable step)
+  double dt_floor = 0.0;           // dt_min_ratio x dt (variable step) [s]
+  double contact_time = 0.0;       // sum of the steps with an active contact [s]
   double end_time = 0.0;           // time reached [s]
   History history;
   std::vector<FieldSnapshot> fields;
