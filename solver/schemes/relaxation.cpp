@@ -13,14 +13,14 @@ std::string number(double x) {
   return buf;
 }
 
-// The run's prescribed DOFs held at their t = 0 displacement, and its loads constant at their
-// t = 0 value (the zero ones dropped).
+// The run's prescribed DOFs held at their t = 0 displacement.
 std::vector<PrescribedDof> held_dofs(const std::vector<PrescribedDof>& prescribed, const Eigen::VectorXd& u) {
   std::vector<PrescribedDof> held;
   for (const PrescribedDof& p : prescribed) held.push_back({p.dof, PrescribedDof::Kind::displacement, u[p.dof], 0.0});
   return held;
 }
 
+// The run's loads, constant at their t = 0 value (the zero ones dropped).
 std::vector<NodalLoad> loads_at_start(const std::vector<NodalLoad>& loads) {
   std::vector<NodalLoad> out;
   for (const NodalLoad& l : loads)
@@ -118,7 +118,8 @@ Relaxation::Status Relaxation::step() {
   }
   update(s_);
   ++report_.steps;
-  // Kinetic damping (Cundall 1976): past a peak of the kinetic energy, every velocity is zeroed.
+  // Kinetic damping (Cundall 1976): past a peak of the kinetic energy, every velocity is zeroed
+  // and u goes back to the step's midpoint, which never adds energy (kRelaxationStepFactor).
   double kinetic = 0.0;
   for (int d = 0; d < n; ++d) kinetic += model_.mass[d] * s_.v_half[d] * s_.v_half[d];
   kinetic *= 0.5;
