@@ -250,19 +250,41 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   // can be inspected; unless this step already has one, or the state is not finite (the VTU
   // files hold finite values only: docs/outputs.md).
   if (result_.fields.empty() || result_.fields.back().step != s.step) {
-    FieldSnapshot f;
-    f.step = s.step;
-    f.time = s.time;
-    f.u = s.u;
-    f.v.resize(s.u.size());
-    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+    FieldSnapshot f = snapshot(s);
+    if (!f.u.allFinite() || !f.v.allFinite()) return;
     f.von_mises.assign(model_.num_cells(), 0.0);
-    if (f.u.allFinite() && f.v.allFinite()) {
-      cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
-      if (std::all_of(f.von_mises.begin(), f.von_mises.end(), [](double x) { return std::isfinite(x); }))
-        result_.fields.push_back(std::move(f));
-    }
+    cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
+    const auto finite = [](const std::vector<double>& a) {
+      return std::all_of(a.begin(), a.end(), [](double x) { return std::isfinite(x); });
+    };
+    if (finite(f.von_mises) && finite(f.cauchy) && finite(f.green_lagrange) && finite(f.contact_force) &&
+        finite(f.contact_gap))
+      result_.fields.push_back(std::move(f));
   }
+}
+
+FieldSnapshot RunMonitor::snapshot(const State& s) const {
+  FieldSnapshot f;
+  f.step = s.step;
+  f.time = s.time;
+  f.u = s.u;
+  f.v.resize(s.u.size());
+  for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+  if (!f.u.allFinite() || !f.v.allFinite()) return f;  // diverge() keeps no snapshot of it
+  f.cauchy.resize(6 * static_cast<std::size_t>(model_.num_cells()));
+  f.green_lagrange.resize(f.cauchy.size());
+  cell_tensors(model_, s.u.data(), f.cauchy.data(), f.green_lagrange.data());
+  contact_fields(s, f);
+  return f;
+}
+
+void RunMonitor::contact_fields(const State& s, FieldSnapshot& f) const {
+  const std::size_t n = static_cast<std::size_t>(model_.num_nodes());
+  f.contact_force.resize(2 * n);
+  f.contact_gap.resize(n);
+  f.contact_status.resize(n);
+  node_contact_fields(model_, settings_.obstacles, contact_, s.u, f.contact_force.data(), f.contact_gap.data(),
+                      f.contact_status.data());
 }
 
 bool RunMonitor::observe(const State& s, double kinetic0) {
@@ -311,13 +333,8 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     ++next_sample_;
   }
   if (next_field_ < field_steps_.size() && field_steps_[next_field_] == n) {
-    FieldSnapshot f;
-    f.step = n;
-    f.time = s.time;
-    f.u = s.u;
-    f.v.resize(s.u.size());
-    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
     if (sampled_step_ != n) throw std::logic_error("RunMonitor: a field snapshot without its stress pass");
+    FieldSnapshot f = snapshot(s);
     f.von_mises = field_cells_;  // of this step's force (or stress) pass
     result_.fields.push_back(std::move(f));
     ++next_field_;
