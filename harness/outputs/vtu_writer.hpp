@@ -39,7 +39,7 @@ struct VtuFormat {
   VtuEncoding encoding = VtuEncoding::ascii;
   VtuCompression compression = VtuCompression::none;  // must be none with ascii
 };
-// Uncompressed size of a zlib block [bytes] (VTK's own default, vtkXMLWriter::BlockSize).
+// Uncompressed size of a zlib block [bytes] (the block size VTK's own writers use by default).
 inline constexpr std::size_t kVtuZlibBlock = 32768;
 
 // The .vtu document (one Piece), in this layout, which VTK's XML reader and meshio's vtu reader

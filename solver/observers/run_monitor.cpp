@@ -247,18 +247,15 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   result_.diverged_step = s.step;
   result_.diverged_time = s.time;
   // The state it diverged in, as one more field snapshot (written like the others), so that it
-  // can be inspected; unless this step already has one, or the state is not finite (the VTU
-  // files hold finite values only: docs/outputs.md).
+  // can be inspected; unless this step already has one, or the state or its von Mises values
+  // are not finite (the VTU files hold finite values only: docs/outputs.md; the tensors and
+  // contact data have their non-finite values written as 0, snapshot()).
   if (result_.fields.empty() || result_.fields.back().step != s.step) {
     FieldSnapshot f = snapshot(s);
     if (!f.u.allFinite() || !f.v.allFinite()) return;
     f.von_mises.assign(model_.num_cells(), 0.0);
     cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
-    const auto finite = [](const std::vector<double>& a) {
-      return std::all_of(a.begin(), a.end(), [](double x) { return std::isfinite(x); });
-    };
-    if (finite(f.von_mises) && finite(f.cauchy) && finite(f.green_lagrange) && finite(f.contact_force) &&
-        finite(f.contact_gap))
+    if (std::all_of(f.von_mises.begin(), f.von_mises.end(), [](double x) { return std::isfinite(x); }))
       result_.fields.push_back(std::move(f));
   }
 }
@@ -275,6 +272,12 @@ FieldSnapshot RunMonitor::snapshot(const State& s) const {
   f.green_lagrange.resize(f.cauchy.size());
   cell_tensors(model_, s.u.data(), f.cauchy.data(), f.green_lagrange.data());
   contact_fields(s, f);
+  // A value that is not finite, which only a state outside the laws' range gives (an inverted
+  // cell, a plane-stress St Venant-Kirchhoff cell stretched beyond a real thickness stretch,
+  // F33^2 < 0) or a diverged step's contact solve, is written as 0 (docs/outputs.md).
+  for (auto* a : {&f.cauchy, &f.green_lagrange, &f.contact_force, &f.contact_gap})
+    for (double& x : *a)
+      if (!std::isfinite(x)) x = 0.0;
   return f;
 }
 
