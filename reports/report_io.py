@@ -1,10 +1,12 @@
 """Readers for what ricochet writes: sweep folders (summary.csv, sweep.json, runs/<id>/),
-history.csv, summary.json, ASCII VTU field files, stability.json, case files (TOML, with a run's
-overrides) and the paper's reference numbers (reference/cros2010.toml). numpy only; no meshio.
+history.csv, summary.json, VTU field files (ascii, appended raw or inline base64, zlib-compressed
+or not), stability.json, case files (TOML, with a run's overrides) and the paper's reference
+numbers (reference/cros2010.toml). numpy only; no meshio.
 
 Formats: docs/outputs.md, docs/sweeps.md, docs/stability.md.
 """
 
+import base64
 import csv
 import glob
 import json
@@ -14,6 +16,7 @@ import re
 import subprocess
 import tomllib
 import xml.etree.ElementTree as ET
+import zlib
 
 import numpy as np
 
@@ -249,34 +252,134 @@ def field_files(fdir):
     return [(t, p) for t, p in out if os.path.exists(p)]
 
 
-def _array(elem):
-    return np.array(elem.text.split(), dtype=float) if elem.text else np.zeros(0)
+_VTK_TYPES = {"Float64": "f8", "Float32": "f4", "Int64": "i8", "Int32": "i4", "Int16": "i2",
+              "Int8": "i1", "UInt64": "u8", "UInt32": "u4", "UInt16": "u2", "UInt8": "u1"}
+
+
+class _VtuDecoder:
+    """The DataArrays of one VTK XML file (docs/outputs.md, fields/*.vtu): format="ascii",
+    "binary" (inline base64) or "appended" (raw or base64 AppendedData), each with or without
+    vtkZLibDataCompressor blocks, as VTK lays them out."""
+
+    def __init__(self, root, appended):
+        order = "<" if root.get("byte_order", "LittleEndian") == "LittleEndian" else ">"
+        self.order = order
+        version = root.get("version", "0.1")
+        default_header = "UInt64" if version not in ("0.1", "0.2") else "UInt32"
+        self.header = np.dtype(order + _VTK_TYPES[root.get("header_type", default_header)])
+        self.compressed = root.get("compressor") is not None
+        if root.get("compressor") not in (None, "vtkZLibDataCompressor"):
+            raise ValueError(f"unsupported compressor {root.get('compressor')}")
+        self.appended = appended  # (encoding, bytes) or None
+
+    def _words(self, raw, count, at=0):
+        return np.frombuffer(raw, dtype=self.header, count=count, offset=at).astype(int)
+
+    def _from_bytes(self, raw):
+        """Header and data of one array from its bytes (all decoded): the data bytes."""
+        hs = self.header.itemsize
+        if not self.compressed:
+            n = int(self._words(raw, 1)[0])
+            return raw[hs:hs + n]
+        nb = int(self._words(raw, 1)[0])
+        sizes = self._words(raw, nb, 3 * hs)
+        at, out = (3 + nb) * hs, []
+        for s in sizes:
+            out.append(zlib.decompress(raw[at:at + s]))
+            at += s
+        return b"".join(out)
+
+    def _inline_base64(self, text):
+        text = "".join(text.split())
+        hs = self.header.itemsize
+        if not self.compressed:
+            raw = base64.b64decode(text)
+            if len(raw) == hs:  # the header encoded on its own, then the data
+                n = len(base64.b64encode(raw))
+                return base64.b64decode(text[n:])[:int(self._words(raw, 1)[0])]
+            return self._from_bytes(raw)
+        first = 4 * ((3 * hs + 2) // 3)
+        nb = int(self._words(base64.b64decode(text[:first])[:3 * hs], 1)[0])
+        hlen = 4 * (((3 + nb) * hs + 2) // 3)
+        head = base64.b64decode(text[:hlen])
+        data = base64.b64decode(text[hlen:])
+        return self._from_bytes(head + data)
+
+    def _appended(self, offset):
+        encoding, blob = self.appended
+        hs = self.header.itemsize
+        if encoding == "raw":
+            if not self.compressed:
+                n = int(self._words(blob, 1, offset)[0])
+                return blob[offset + hs:offset + hs + n]
+            nb = int(self._words(blob, 1, offset)[0])
+            total = (3 + nb) * hs + int(np.sum(self._words(blob, nb, offset + 3 * hs)))
+            return self._from_bytes(blob[offset:offset + total])
+        text = blob[offset:].decode("ascii")
+        end = len(text)
+        for stop in ("<", "\n"):
+            k = text.find(stop)
+            end = min(end, k) if k >= 0 else end
+        return self._inline_base64(text[:end])
+
+    def values(self, da):
+        kind = da.get("type")
+        fmt = da.get("format", "ascii")
+        if fmt == "ascii":
+            return np.array(da.text.split(), dtype=float) if da.text else np.zeros(0)
+        if fmt == "binary":
+            raw = self._inline_base64(da.text or "")
+        elif fmt == "appended":
+            raw = self._appended(int(da.get("offset")))
+        else:
+            raise ValueError(f"unknown DataArray format {fmt}")
+        return np.frombuffer(raw, dtype=np.dtype(self.order + _VTK_TYPES[kind])).astype(float)
+
+
+def _parse_vtu(path):
+    """(XML root, appended data (encoding, bytes) or None) of a VTU file; raw AppendedData is
+    cut off before parsing (it is not XML)."""
+    with open(path, "rb") as f:
+        blob = f.read()
+    at = blob.find(b"<AppendedData")
+    if at < 0:
+        return ET.fromstring(blob), None
+    tag_end = blob.index(b">", at)
+    encoding = re.search(rb'encoding="([^"]*)"', blob[at:tag_end + 1])
+    encoding = encoding.group(1).decode() if encoding else "raw"
+    start = blob.index(b"_", tag_end) + 1
+    end = blob.rfind(b"</AppendedData>")
+    root = ET.fromstring(blob[:at] + b"</VTKFile>")
+    return root, (encoding, blob[start:end])
 
 
 def read_vtu(path):
-    """An ASCII VTK XML UnstructuredGrid as written by ricochet (docs/outputs.md):
-    {time, points (n,2) deformed, displacement (n,2), cells [list of index arrays],
-    cell_data {name: array}, point_data {name: array}}."""
-    root = ET.parse(path).getroot()
+    """A VTK XML UnstructuredGrid as written by ricochet (docs/outputs.md), in any of its
+    field formats: {time, points (n,2) deformed, displacement (n,2), cells [list of index
+    arrays], cell_data {name: array}, point_data {name: array}}; arrays of several components
+    are (tuples, components)."""
+    root, appended = _parse_vtu(path)
+    dec = _VtuDecoder(root, appended)
     out = {"time": math.nan, "cell_data": {}, "point_data": {}}
     for fd in root.iter("FieldData"):
         for da in fd.iter("DataArray"):
             if da.get("Name") == "TimeValue":
-                out["time"] = float(da.text.split()[0])
+                out["time"] = float(dec.values(da)[0])
     piece = next(root.iter("Piece"))
-    pd = piece.find("PointData")
-    for da in (list(pd) if pd is not None else []):
-        a = _array(da)
-        nc = int(da.get("NumberOfComponents", "1"))
-        out["point_data"][da.get("Name")] = a.reshape(-1, nc) if nc > 1 else a
-    cd = piece.find("CellData")
-    for da in (list(cd) if cd is not None else []):
-        out["cell_data"][da.get("Name")] = _array(da)
-    pts = _array(piece.find("Points").find("DataArray")).reshape(-1, 3)
+
+    def arrays(section, into):
+        for da in (list(section) if section is not None else []):
+            a = dec.values(da)
+            nc = int(da.get("NumberOfComponents", "1"))
+            into[da.get("Name")] = a.reshape(-1, nc) if nc > 1 else a
+
+    arrays(piece.find("PointData"), out["point_data"])
+    arrays(piece.find("CellData"), out["cell_data"])
+    pts = dec.values(piece.find("Points").find("DataArray")).reshape(-1, 3)
     out["points"] = pts[:, :2]
     cells = {da.get("Name"): da for da in piece.find("Cells")}
-    conn = _array(cells["connectivity"]).astype(int)
-    offs = _array(cells["offsets"]).astype(int)
+    conn = dec.values(cells["connectivity"]).astype(int)
+    offs = dec.values(cells["offsets"]).astype(int)
     starts = np.concatenate([[0], offs[:-1]])
     out["cells"] = [conn[a:b] for a, b in zip(starts, offs)]
     disp = out["point_data"].get("displacement")

@@ -173,6 +173,48 @@ TEST_F(CliTest, RejectsBadVariableStep) {
   expect_rejected(autodt, "--set time.dt_min_ratio=1.5", {"time.dt_min_ratio", "in (0, 1]"});
 }
 
+// output.field_format and output.field_compression: bad values are one-line input errors naming
+// the file and key; the default is binary with zlib, and every encoding holds the same arrays.
+TEST_F(CliTest, FieldFormatKeys) {
+  const std::string in_output = "fields = [5e-4]";
+  expect_rejected(replace(kGood, in_output, in_output + "\nfield_format = \"hdf5\""), "",
+                  {"output.field_format", "got \"hdf5\"", "\"ascii\", \"binary\", \"base64\""});
+  expect_rejected(replace(kGood, in_output, in_output + "\nfield_compression = \"gzip\""), "",
+                  {"output.field_compression", "got \"gzip\"", "\"none\", \"zlib\""});
+  expect_rejected(replace(kGood, in_output, in_output + "\nfield_format = \"ascii\"\nfield_compression = \"zlib\""),
+                  "", {"output.field_compression", "needs field_format \"binary\" or \"base64\""});
+  expect_rejected(kGood, "--set output.field_format=ascii --set output.field_compression=zlib",
+                  {"--set output.field_compression", "needs field_format"});
+  expect_rejected(kGood, "--set output.field_format=1", {"output.field_format"});
+  expect_rejected(replace(kGood, in_output, in_output + "\nfield_formats = \"ascii\""), "",
+                  {"field_formats", "did you mean", "field_format"});
+
+  const std::string file = write("case.toml", kGood);
+  struct Expect {
+    std::string args, format, compressor;
+  };
+  for (const Expect& e : std::vector<Expect>{
+           {"", "appended", "vtkZLibDataCompressor"},
+           {"--set output.field_compression=none", "appended", ""},
+           {"--set output.field_format=base64", "binary", "vtkZLibDataCompressor"},
+           {"--set output.field_format=base64 --set output.field_compression=none", "binary", ""},
+           {"--set output.field_format=ascii", "ascii", ""}}) {
+    fs::remove_all(out());
+    const Outcome o = run("run " + file + " --out " + out() + " --quiet " + e.args);
+    ASSERT_EQ(o.status, 0) << e.args << ": " << o.output;
+    std::ifstream vtu(fs::path(out()) / "fields" / "tiny_00000050.vtu", std::ios::binary);
+    std::stringstream text;
+    text << vtu.rdbuf();
+    const std::string doc = text.str();
+    ASSERT_FALSE(doc.empty()) << e.args;
+    for (const char* name : {"displacement", "velocity", "contact_force", "contact_gap", "contact_status", "von_mises",
+                             "cauchy_stress", "green_lagrange_strain", "body"})
+      EXPECT_NE(doc.find(std::string("Name=\"") + name + "\""), std::string::npos) << e.args << ": " << name;
+    EXPECT_NE(doc.find("Name=\"connectivity\" format=\"" + e.format + "\""), std::string::npos) << e.args;
+    EXPECT_EQ(doc.find("compressor=\"vtkZLibDataCompressor\"") != std::string::npos, !e.compressor.empty()) << e.args;
+  }
+}
+
 TEST_F(CliTest, SetOverridesAKey) {
   const std::string file = write("case.toml", kGood);
   const Outcome o = run("run " + file + " --out " + out() + " --set time.dt=2e-5 --set bodies[0].velocity=[0,1]");

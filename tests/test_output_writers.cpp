@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -19,6 +21,8 @@
 #include "harness/outputs/csv_writer.hpp"
 #include "harness/outputs/json_io.hpp"
 #include "harness/outputs/vtu_writer.hpp"
+
+#include <zlib.h>
 
 namespace ricochet {
 namespace {
@@ -371,6 +375,313 @@ TEST(VtuWriter, NonFiniteValuesAndEscapedNames) {
   EXPECT_EQ(xml_error(xml), "");
   EXPECT_EQ(array_values(xml, "temperature"), (Tokens{"nan", "inf", "-inf", "nan", "5e-324"}));
   EXPECT_NE(xml.find("Name=\"a&lt;b &amp; &quot;c&quot;\""), std::string::npos);
+}
+
+// ---------------------------------------------------------------- VTU binary encodings
+// A decoder written here from the VTK XML file format (not from the writer): it reads each
+// DataArray's attributes, finds its bytes (format="appended": at `offset` after the '_' of
+// <AppendedData encoding="raw">; format="binary": inline base64) and undoes the UInt64 header
+// and the vtkZLibDataCompressor blocks. The arrays it returns are compared bit for bit with the
+// values that were written and with the ASCII document of the same data.
+
+struct DecodedArray {
+  std::map<std::string, std::string> attributes;
+  std::string bytes;  // the data, uncompressed
+};
+
+std::string attribute(const std::string& tag, const std::string& name) {
+  const std::string key = " " + name + "=\"";
+  const std::size_t at = tag.find(key);
+  if (at == std::string::npos) return "";
+  const std::size_t begin = at + key.size();
+  return tag.substr(begin, tag.find('"', begin) - begin);
+}
+
+std::string base64_decode(const std::string& text) {
+  auto digit = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  std::string out;
+  unsigned buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    if (c == '=') break;
+    const int d = digit(c);
+    if (d < 0) {
+      EXPECT_TRUE(std::isspace(static_cast<unsigned char>(c))) << "not base64: '" << c << "'";
+      continue;
+    }
+    buffer = (buffer << 6) | static_cast<unsigned>(d);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>((buffer >> bits) & 0xFFu);
+    }
+  }
+  return out;
+}
+
+std::uint64_t word(const std::string& bytes, std::size_t at) {
+  std::uint64_t w = 0;
+  EXPECT_LE(at + 8, bytes.size());
+  if (at + 8 <= bytes.size()) std::memcpy(&w, bytes.data() + at, 8);
+  return w;
+}
+
+// The data of one array from its header and bytes, checking the header's words.
+std::string undo_blocks(const std::string& raw, bool compressed, std::size_t* used = nullptr) {
+  if (!compressed) {
+    const std::uint64_t n = word(raw, 0);
+    EXPECT_LE(8 + n, raw.size());
+    if (used) *used = 8 + n;
+    return raw.substr(8, n);
+  }
+  const std::uint64_t blocks = word(raw, 0), block = word(raw, 8), last = word(raw, 16);
+  EXPECT_EQ(block, 32768u);
+  std::size_t at = 8 * (3 + blocks);
+  std::string out;
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    const std::uint64_t packed = word(raw, 8 * (3 + b));
+    const uLongf expected = b + 1 < blocks || last == 0 ? block : last;
+    std::string plain(expected, '\0');
+    uLongf got = expected;
+    EXPECT_EQ(uncompress(reinterpret_cast<Bytef*>(plain.data()), &got,
+                         reinterpret_cast<const Bytef*>(raw.data()) + at, static_cast<uLong>(packed)),
+              Z_OK);
+    EXPECT_EQ(got, expected) << "block " << b;
+    out += plain.substr(0, got);
+    at += packed;
+  }
+  if (used) *used = at;
+  return out;
+}
+
+// Every DataArray of a VTU document, by Name, decoded.
+std::map<std::string, DecodedArray> decode_vtu(const std::string& doc) {
+  const std::string open = "<VTKFile ";
+  const std::string root = doc.substr(doc.find(open), doc.find('>', doc.find(open)) - doc.find(open));
+  const bool compressed = attribute(root, "compressor") == "vtkZLibDataCompressor";
+  const bool binary = attribute(root, "version") == "1.0";
+  if (binary) {
+    EXPECT_EQ(attribute(root, "header_type"), "UInt64");
+    EXPECT_EQ(attribute(root, "byte_order"), "LittleEndian");
+  }
+  std::string appended;
+  const std::size_t data_tag = doc.find("<AppendedData encoding=\"raw\">");
+  if (data_tag != std::string::npos) {
+    const std::size_t start = doc.find('_', data_tag) + 1;
+    appended = doc.substr(start, doc.rfind("\n  </AppendedData>") - start);
+  }
+  const std::size_t piece = doc.find("<Piece ");
+  const std::size_t xml_end = data_tag == std::string::npos ? doc.size() : data_tag;
+  std::map<std::string, DecodedArray> out;
+  for (std::size_t at = doc.find("<DataArray", piece); at < xml_end; at = doc.find("<DataArray", at + 1)) {
+    const std::size_t end = doc.find('>', at);
+    const std::string tag = doc.substr(at, end - at + 1);
+    DecodedArray a;
+    for (const char* key : {"type", "Name", "NumberOfComponents", "format", "offset", "ComponentName0",
+                            "ComponentName3", "ComponentName5"})
+      a.attributes[key] = attribute(tag, key);
+    const std::string format = a.attributes["format"];
+    if (format == "appended") {
+      EXPECT_EQ(tag.substr(tag.size() - 2), "/>");
+      const std::size_t offset = std::stoul(a.attributes["offset"]);
+      EXPECT_LT(offset, appended.size());
+      a.bytes = undo_blocks(appended.substr(offset), compressed);
+    } else if (format == "binary") {
+      const std::size_t text_end = doc.find("</DataArray>", end);
+      const std::string text = doc.substr(end + 1, text_end - end - 1);
+      if (!compressed) {
+        a.bytes = undo_blocks(base64_decode(text), false);
+      } else {
+        // The header on its own (3 words, then one per block), then the blocks.
+        const std::string first = base64_decode(text.substr(text.find_first_not_of(" \n"), 32));
+        const std::uint64_t blocks = word(first, 0);
+        std::string trimmed;
+        for (const char c : text)
+          if (!std::isspace(static_cast<unsigned char>(c))) trimmed += c;
+        const std::size_t head_chars = 4 * ((8 * (3 + blocks) + 2) / 3);
+        const std::string head = base64_decode(trimmed.substr(0, head_chars));
+        EXPECT_EQ(head.size(), 8 * (3 + blocks));
+        a.bytes = undo_blocks(head + base64_decode(trimmed.substr(head_chars)), true);
+      }
+    } else {
+      const std::size_t text_end = doc.find("</DataArray>", end);
+      a.bytes = doc.substr(end + 1, text_end - end - 1);  // the ascii text itself
+    }
+    out[a.attributes["Name"]] = a;
+  }
+  return out;
+}
+
+template <class T>
+std::vector<T> as(const std::string& bytes) {
+  EXPECT_EQ(bytes.size() % sizeof(T), 0u);
+  std::vector<T> v(bytes.size() / sizeof(T));
+  if (!v.empty()) std::memcpy(v.data(), bytes.data(), v.size() * sizeof(T));
+  return v;
+}
+
+// The ascii text of an array as doubles (strtod: the shortest round-trip text reads back exactly).
+std::vector<double> ascii_values(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<double> v;
+  for (std::string token; in >> token;) v.push_back(std::strtod(token.c_str(), nullptr));
+  return v;
+}
+
+void expect_bits(const std::vector<double>& got, const std::vector<double>& want, const std::string& what) {
+  ASSERT_EQ(got.size(), want.size()) << what;
+  for (std::size_t i = 0; i < got.size(); ++i)
+    ASSERT_EQ(std::bit_cast<std::uint64_t>(got[i]), std::bit_cast<std::uint64_t>(want[i])) << what << " [" << i << "]";
+}
+
+// A grid of nx x ny cells, quads on the left half and triangles on the right, with every kind of
+// array; large enough (121 x 41 points: 119 kB of point vectors) for several zlib blocks.
+VtuData big_mesh() {
+  const int nx = 120, ny = 40, n = (nx + 1) * (ny + 1);
+  VtuData d;
+  d.points.resize(2, n);
+  Eigen::Matrix2Xd velocity(2, n);
+  std::vector<double> gap(n);
+  std::vector<int> status(n);
+  std::mt19937_64 random(42);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const int k = j * (nx + 1) + i;
+      d.points(0, k) = 0.01 * i + 1e-7 * uniform(random);
+      d.points(1, k) = 0.01 * j;
+      velocity(0, k) = uniform(random);
+      velocity(1, k) = k < static_cast<int>(awkward.size()) ? awkward[k] : -uniform(random);
+      gap[k] = j == 0 ? 0.0 : 1e-3 * j;
+      status[k] = j == 0 ? 3 : i == 0 || i == nx || j == ny ? 1 : 0;
+    }
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i, b = a + 1, c = b + nx + 1, e = a + nx + 1;
+      if (i < nx / 2) {
+        d.quads.push_back({a, b, c, e});
+      } else {
+        d.tris.push_back({a, b, c});
+        d.tris.push_back({a, c, e});
+      }
+    }
+  const std::size_t cells = d.quads.size() + d.tris.size();
+  std::vector<double> vm(cells), tensor(6 * cells);
+  std::vector<int> body(cells);
+  for (std::size_t c = 0; c < cells; ++c) {
+    vm[c] = 1e6 * (1.0 + uniform(random));
+    body[c] = c < d.quads.size() ? 0 : 1;
+    for (int k = 0; k < 6; ++k) tensor[6 * c + k] = k >= 4 ? 0.0 : 1e5 * uniform(random);
+  }
+  d.time = 1.0 / 3.0;
+  d.point_vectors = {{"displacement", d.points * 1e-3}, {"velocity", velocity}};
+  d.point_scalars = {{"contact_gap", gap}};
+  d.point_ints = {{"contact_status", status}};
+  d.cell_scalars = {{"von_mises", vm}};
+  d.cell_tensors = {{"cauchy_stress", tensor}};
+  d.cell_ints = {{"body", body}};
+  return d;
+}
+
+std::vector<double> xy0_values(const Eigen::Matrix2Xd& m) {
+  std::vector<double> v;
+  for (Eigen::Index j = 0; j < m.cols(); ++j) v.insert(v.end(), {m(0, j), m(1, j), 0.0});
+  return v;
+}
+
+TEST(VtuWriter, BinaryEncodingsRoundTripBitForBit) {
+  const VtuData data = big_mesh();
+  const std::map<std::string, DecodedArray> text = decode_vtu(format_vtu(data));
+  std::vector<std::int32_t> connectivity;
+  for (const auto& q : data.quads) connectivity.insert(connectivity.end(), q.begin(), q.end());
+  for (const auto& t : data.tris) connectivity.insert(connectivity.end(), t.begin(), t.end());
+  const std::size_t cells = data.quads.size() + data.tris.size();
+  ASSERT_GT(xy0_values(data.points).size() * 8, 3 * kVtuZlibBlock) << "several zlib blocks";
+
+  struct Case {
+    VtuFormat format;
+    const char* attribute;
+  };
+  std::map<std::string, std::size_t> sizes;
+  for (const Case& c : {Case{{VtuEncoding::binary, VtuCompression::none}, "appended"},
+                        Case{{VtuEncoding::binary, VtuCompression::zlib}, "appended"},
+                        Case{{VtuEncoding::base64, VtuCompression::none}, "binary"},
+                        Case{{VtuEncoding::base64, VtuCompression::zlib}, "binary"}}) {
+    const std::string doc = format_vtu(data, c.format);
+    const std::string what = std::string(c.format.encoding == VtuEncoding::binary ? "binary" : "base64") +
+                             (c.format.compression == VtuCompression::zlib ? "+zlib" : "");
+    sizes[what] = doc.size();
+    SCOPED_TRACE(what);
+    // The XML around the data is well-formed (raw appended bytes are not XML: checked up to them).
+    const std::size_t raw = doc.find("<AppendedData");
+    EXPECT_EQ(xml_error(raw == std::string::npos ? doc : doc.substr(0, raw) + "</VTKFile>\n"), "");
+    EXPECT_EQ(doc.find("compressor=") != std::string::npos, c.format.compression == VtuCompression::zlib);
+    const std::map<std::string, DecodedArray> a = decode_vtu(doc);
+    ASSERT_EQ(a.size(), text.size());
+    for (const auto& [name, array] : a) {
+      EXPECT_EQ(array.attributes.at("format"), c.attribute) << name;
+      EXPECT_EQ(array.attributes.at("type"), text.at(name).attributes.at("type")) << name;
+      EXPECT_EQ(array.attributes.at("NumberOfComponents"), text.at(name).attributes.at("NumberOfComponents")) << name;
+    }
+    // Against the values written, bit for bit, and against the ascii document of the same data.
+    for (const auto& [name, values] : data.point_vectors) {
+      expect_bits(as<double>(a.at(name).bytes), xy0_values(values), name);
+      expect_bits(as<double>(a.at(name).bytes), ascii_values(text.at(name).bytes), name + " (ascii)");
+    }
+    expect_bits(as<double>(a.at("Points").bytes), xy0_values(data.points), "Points");
+    expect_bits(as<double>(a.at("contact_gap").bytes), data.point_scalars[0].second, "contact_gap");
+    expect_bits(as<double>(a.at("von_mises").bytes), data.cell_scalars[0].second, "von_mises");
+    expect_bits(as<double>(a.at("von_mises").bytes), ascii_values(text.at("von_mises").bytes), "von_mises (ascii)");
+    expect_bits(as<double>(a.at("cauchy_stress").bytes), data.cell_tensors[0].second, "cauchy_stress");
+    expect_bits(as<double>(a.at("cauchy_stress").bytes), ascii_values(text.at("cauchy_stress").bytes),
+                "cauchy_stress (ascii)");
+    EXPECT_EQ(a.at("cauchy_stress").attributes.at("ComponentName0"), "XX");
+    EXPECT_EQ(a.at("cauchy_stress").attributes.at("ComponentName3"), "XY");
+    EXPECT_EQ(a.at("cauchy_stress").attributes.at("ComponentName5"), "XZ");
+    EXPECT_EQ(as<std::int32_t>(a.at("contact_status").bytes), data.point_ints[0].second);
+    EXPECT_EQ(as<std::int32_t>(a.at("body").bytes), data.cell_ints[0].second);
+    EXPECT_EQ(as<std::int32_t>(a.at("connectivity").bytes), connectivity);
+    const std::vector<std::int64_t> offsets = as<std::int64_t>(a.at("offsets").bytes);
+    const std::vector<std::uint8_t> types = as<std::uint8_t>(a.at("types").bytes);
+    ASSERT_EQ(offsets.size(), cells);
+    ASSERT_EQ(types.size(), cells);
+    EXPECT_EQ(offsets.back(), static_cast<std::int64_t>(connectivity.size()));
+    EXPECT_EQ(offsets[0], 4);
+    EXPECT_EQ(types.front(), 9);
+    EXPECT_EQ(types.back(), 5);
+    // The time stays inline ascii in every encoding.
+    EXPECT_NE(doc.find("Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n0.3333333333333333\n"),
+              std::string::npos);
+  }
+  // Sizes: raw bytes are 3/4 of their base64 text; compression pays on these arrays.
+  EXPECT_LT(sizes.at("binary"), sizes.at("base64"));
+  EXPECT_LT(sizes.at("binary+zlib"), sizes.at("binary"));
+  EXPECT_LT(sizes.at("base64+zlib"), sizes.at("base64"));
+}
+
+// Non-finite values, which the ascii format cannot carry to VTK, keep their bits in binary.
+TEST(VtuWriter, BinaryKeepsNonFiniteBits) {
+  VtuData data = mixed_mesh();
+  data.point_scalars[0].second = {nan_value, inf_value, -inf_value, -nan_value, 5e-324};
+  for (const VtuEncoding e : {VtuEncoding::binary, VtuEncoding::base64})
+    for (const VtuCompression z : {VtuCompression::none, VtuCompression::zlib}) {
+      const auto a = decode_vtu(format_vtu(data, {e, z}));
+      expect_bits(as<double>(a.at("temperature").bytes), data.point_scalars[0].second, "temperature");
+    }
+}
+
+TEST(VtuWriter, AsciiWithCompressionThrows) {
+  EXPECT_THROW(format_vtu(mixed_mesh(), {VtuEncoding::ascii, VtuCompression::zlib}), std::invalid_argument);
+  VtuData data = mixed_mesh();
+  data.cell_tensors = {{"strain", std::vector<double>(6 * 2 - 1, 0.0)}};  // one short of 6 per cell
+  EXPECT_THROW(format_vtu(data, {VtuEncoding::binary, VtuCompression::zlib}), std::invalid_argument);
 }
 
 TEST(PvdWriter, ExactOutputAndChecks) {

@@ -31,6 +31,9 @@ work-precision points, the scheme-limits table (one row per mesh × scheme pair,
 recomputed here from the two history.csv files) and the run histories present. reports/plot_run.py must draw one run and
 fail with one line (exit 2) on a folder without history.csv.
 
+The VTU reader of the reports (class VtuReader) must read one snapshot written in each field
+encoding (ascii, binary and base64, with and without zlib) to the same arrays, bit for bit.
+
     /usr/bin/python3 tests/test_report.py [RICOCHET_BINARY]     (or env RICOCHET_BINARY)
 """
 
@@ -881,6 +884,43 @@ class SweepReport(unittest.TestCase):
         p = run([PY, SCRIPT, self.two, "--max-run-plots", "x"], ok=(2,))
         self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
 
+
+class VtuReader(unittest.TestCase):
+    """reports/report_io.read_vtu reads every field encoding of docs/outputs.md: the same run
+    (the sliding block, 0.1 ms, one snapshot) written in ascii, binary and base64, with and
+    without zlib, gives the same arrays, bit for bit."""
+
+    def test_every_encoding_reads_the_same(self):
+        sys.path.insert(0, os.path.join(REPO, "reports"))
+        from report_io import read_vtu
+        case = os.path.join(REPO, "cases", "verification", "sliding_block.toml")
+        tmp = tempfile.mkdtemp(prefix="ricochet_vtu_")
+        try:
+            read = {}
+            for fmt, comp in (("ascii", "none"), ("binary", "none"), ("binary", "zlib"),
+                              ("base64", "none"), ("base64", "zlib")):
+                out = os.path.join(tmp, f"{fmt}_{comp}")
+                run([BINARY, "run", case, "--out", out, "--quiet", "--set", "time.end=1e-4",
+                     "--set", "output.fields=[1e-4]", "--set", f"output.field_format={fmt}",
+                     "--set", f"output.field_compression={comp}"])
+                files = [f for f in os.listdir(os.path.join(out, "fields")) if f.endswith(".vtu")]
+                self.assertEqual(len(files), 1)
+                read[(fmt, comp)] = read_vtu(os.path.join(out, "fields", files[0]))
+            ref = read[("ascii", "none")]
+            self.assertEqual(ref["cell_data"]["cauchy_stress"].shape, (len(ref["cells"]), 6))
+            self.assertEqual(ref["point_data"]["contact_force"].shape, (len(ref["points"]), 3))
+            self.assertGreater(ref["point_data"]["contact_status"].max(), 1)
+            for key, v in read.items():
+                self.assertEqual(v["time"], ref["time"], key)
+                self.assertTrue(all((a == b).all() for a, b in zip(v["cells"], ref["cells"])), key)
+                self.assertTrue((v["points"] == ref["points"]).all(), key)
+                for section in ("point_data", "cell_data"):
+                    self.assertEqual(sorted(v[section]), sorted(ref[section]), key)
+                    for name, a in v[section].items():
+                        self.assertTrue((a.view("u8") == ref[section][name].view("u8")).all(),
+                                        f"{key} {name}")
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
 
 def main():
     global BINARY

@@ -444,6 +444,19 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
                        : measure == "kirchhoff" ? StressMeasure::kirchhoff
                                                 : StressMeasure::cauchy;
     c.stress_every_step = out->boolean("stress_every_step", true);
+    // The field files' encoding and compression (docs/outputs.md, fields/*.vtu). Compression
+    // applies to binary data: with "ascii" it may only be absent or "none".
+    const std::string encoding = out->choice("field_format", "binary", {"ascii", "binary", "base64"});
+    c.field_format.encoding = encoding == "ascii"    ? VtuEncoding::ascii
+                              : encoding == "base64" ? VtuEncoding::base64
+                                                     : VtuEncoding::binary;
+    const std::string compression =
+        out->choice("field_compression", encoding == "ascii" ? "none" : "zlib", {"none", "zlib"});
+    if (encoding == "ascii" && compression != "none")
+      out->fail("field_compression", "\"" + compression +
+                                         "\" needs field_format \"binary\" or \"base64\"; with \"ascii\" "
+                                         "allowed: \"none\" (or leave it out)");
+    c.field_format.compression = compression == "zlib" ? VtuCompression::zlib : VtuCompression::none;
     for (const auto& p : out->tables("probes")) {
       c.probes.push_back(read_probe(p, first_body));
       for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)

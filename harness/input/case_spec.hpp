@@ -12,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include "harness/input/mesh_generators.hpp"
+#include "harness/outputs/vtu_writer.hpp"
 #include "solver/schemes/implicit.hpp"
 #include "solver/model/model.hpp"
 
@@ -169,6 +170,8 @@ struct CaseSpec {
   std::vector<double> field_times;  // [s]
   StressMeasure stress_measure = StressMeasure::cauchy;  // of von_mises_max and the fields
   bool stress_every_step = true;  // von_mises_max over every step (else over the samples)
+  // How fields/*.vtu store their arrays: output.field_format and output.field_compression.
+  VtuFormat field_format{VtuEncoding::binary, VtuCompression::zlib};
   std::vector<ProbeSpec> probes;
 
   double energy_growth_limit = 2.0;  // [-]

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <stdexcept>
 
 #include "harness/outputs/atomic_file.hpp"
 #include "harness/outputs/csv_writer.hpp"
@@ -37,8 +38,11 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
     }
   }
   // VTU order is all quads then all triangles; map the per-cell values to it.
-  std::vector<double> vm;
+  std::vector<double> vm, cauchy, green_lagrange;
   std::vector<int> body_id;
+  vm.reserve(m.num_cells());
+  cauchy.reserve(6 * static_cast<std::size_t>(m.num_cells()));
+  green_lagrange.reserve(cauchy.capacity());
   for (int pass = 0; pass < 2; ++pass)
     for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
       const int c0 = m.bodies[b].first_cell;
@@ -47,13 +51,25 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
       const int end = pass == 0 ? c0 + nq : c0 + m.bodies[b].num_cells;
       for (int c = begin; c < end; ++c) {
         vm.push_back(f.von_mises[c]);
+        cauchy.insert(cauchy.end(), f.cauchy.begin() + 6 * c, f.cauchy.begin() + 6 * c + 6);
+        green_lagrange.insert(green_lagrange.end(), f.green_lagrange.begin() + 6 * c,
+                              f.green_lagrange.begin() + 6 * c + 6);
         body_id.push_back(static_cast<int>(b));
       }
     }
-  d.point_vectors = {{"displacement", Eigen::Matrix2Xd(u)}, {"velocity", Eigen::Matrix2Xd(v)}};
+  if (f.contact_force.size() != 2 * static_cast<std::size_t>(m.num_nodes()) ||
+      f.cauchy.size() != 6 * static_cast<std::size_t>(m.num_cells()) || f.green_lagrange.size() != f.cauchy.size())
+    throw std::logic_error("field snapshot of step " + std::to_string(f.step) + " lacks its tensors or contact data");
+  const Eigen::Map<const Eigen::Matrix2Xd> force(f.contact_force.data(), 2, m.num_nodes());
+  d.point_vectors = {{"displacement", Eigen::Matrix2Xd(u)},
+                     {"velocity", Eigen::Matrix2Xd(v)},
+                     {"contact_force", Eigen::Matrix2Xd(force)}};
+  d.point_scalars = {{"contact_gap", f.contact_gap}};
+  d.point_ints = {{"contact_status", f.contact_status}};
   d.cell_scalars = {{"von_mises", vm}};
+  d.cell_tensors = {{"cauchy_stress", cauchy}, {"green_lagrange_strain", green_lagrange}};
   d.cell_ints = {{"body", body_id}};
-  return format_vtu(d);
+  return format_vtu(d, pc.spec.field_format);
 }
 
 }  // namespace

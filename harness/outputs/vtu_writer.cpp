@@ -1,13 +1,17 @@
 #include "harness/outputs/vtu_writer.hpp"
 
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <set>
 #include <stdexcept>
 #include <string_view>
 #include <type_traits>
+
+#include <zlib.h>
 
 #include "harness/outputs/csv_writer.hpp"
 
@@ -19,11 +23,12 @@
 // ParaView issue #19042, where VTK's own ASCII output with NaN cannot be read back). meshio
 // reads ascii arrays with numpy.fromstring, which accepts "nan", "inf" and "-inf". So
 // non-finite values are written as those three tokens, unchanged; a field meant for ParaView
-// must be finite, or this writer must switch to base64 "binary" arrays, which carry any bits.
+// must be finite, or be written in the binary or base64 encodings, which carry any bits.
 
 namespace ricochet {
 namespace {
 
+static_assert(sizeof(int) == 4, "Int32 arrays are written from int");
 constexpr std::uint8_t vtk_triangle = 5;
 constexpr std::uint8_t vtk_quad = 9;
 
@@ -60,21 +65,119 @@ void append_int(std::string& out, std::int64_t value) {
   out.append(buffer, std::to_chars(buffer, buffer + sizeof buffer, value).ptr);
 }
 
-void open_array(std::string& out, const char* indent, const char* type, std::string_view name,
-                int components) {
-  out += indent;
-  out += "<DataArray type=\"";
-  out += type;
-  out += '"';
-  if (!name.empty()) out += " Name=\"" + xml_attribute(name) + '"';
-  if (components > 1) out += " NumberOfComponents=\"" + std::to_string(components) + '"';
-  out += " format=\"ascii\">\n";
+// Base64 (RFC 4648, with '=' padding) of `n` bytes, appended to `out`.
+void append_base64(std::string& out, const unsigned char* p, std::size_t n) {
+  static constexpr char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  for (std::size_t i = 0; i < n; i += 3) {
+    const unsigned b0 = p[i], b1 = i + 1 < n ? p[i + 1] : 0u, b2 = i + 2 < n ? p[i + 2] : 0u;
+    out += digits[b0 >> 2];
+    out += digits[((b0 & 3u) << 4) | (b1 >> 4)];
+    out += i + 1 < n ? digits[((b1 & 15u) << 2) | (b2 >> 6)] : '=';
+    out += i + 2 < n ? digits[b2 & 63u] : '=';
+  }
 }
 
-void close_array(std::string& out, const char* indent) {
-  out += indent;
-  out += "</DataArray>\n";
+void append_u64(std::string& bytes, std::uint64_t v) {
+  char b[sizeof v];
+  std::memcpy(b, &v, sizeof v);
+  bytes.append(b, sizeof v);
 }
+
+// The DataArrays of one document in the chosen encoding. ascii arrays are written as text in
+// place; binary arrays go to `appended` and are written at the end; base64 ones inline.
+class ArrayWriter {
+ public:
+  explicit ArrayWriter(const VtuFormat& f) : f_(f) {}
+
+  // One DataArray: `values` (count values, components per tuple), with `text` writing its
+  // ascii body; tensors get ComponentName0..5.
+  template <class T, class Text>
+  void add(std::string& out, const char* type, std::string_view name, int components, const T* values,
+           std::size_t count, Text&& text, bool tensor = false) {
+    constexpr const char* in = "        ";  // DataArray indentation inside Piece sections
+    out += in;
+    out += "<DataArray type=\"";
+    out += type;
+    out += '"';
+    if (!name.empty()) out += " Name=\"" + xml_attribute(name) + '"';
+    if (components > 1) out += " NumberOfComponents=\"" + std::to_string(components) + '"';
+    if (tensor) {
+      static constexpr const char* names[] = {"XX", "YY", "ZZ", "XY", "YZ", "XZ"};
+      for (int k = 0; k < 6; ++k) out += " ComponentName" + std::to_string(k) + "=\"" + names[k] + '"';
+    }
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
+    const std::size_t size = count * sizeof(T);
+    switch (f_.encoding) {
+      case VtuEncoding::ascii:
+        out += " format=\"ascii\">\n";
+        text(out);
+        out += in;
+        out += "</DataArray>\n";
+        return;
+      case VtuEncoding::binary:
+        out += " format=\"appended\" offset=\"" + std::to_string(appended_.size()) + "\"/>\n";
+        block(appended_, bytes, size);
+        return;
+      case VtuEncoding::base64: {
+        out += " format=\"binary\">\n";
+        out += in;
+        out += "  ";
+        std::string raw;
+        const std::size_t head = block(raw, bytes, size);
+        if (f_.compression == VtuCompression::none) {
+          append_base64(out, reinterpret_cast<const unsigned char*>(raw.data()), raw.size());
+        } else {
+          append_base64(out, reinterpret_cast<const unsigned char*>(raw.data()), head);
+          append_base64(out, reinterpret_cast<const unsigned char*>(raw.data()) + head, raw.size() - head);
+        }
+        out += '\n';
+        out += in;
+        out += "</DataArray>\n";
+        return;
+      }
+    }
+  }
+
+  // The <AppendedData> section (binary encoding), or nothing.
+  void finish(std::string& out) const {
+    if (f_.encoding != VtuEncoding::binary) return;
+    out += "  <AppendedData encoding=\"raw\">\n   _";
+    out += appended_;
+    out += "\n  </AppendedData>\n";
+  }
+
+ private:
+  // Appends one array's header and data to `bytes`; returns the header's size in bytes.
+  std::size_t block(std::string& bytes, const unsigned char* data, std::size_t size) const {
+    if (f_.compression == VtuCompression::none) {
+      append_u64(bytes, size);
+      bytes.append(reinterpret_cast<const char*>(data), size);
+      return sizeof(std::uint64_t);
+    }
+    const std::size_t blocks = (size + kVtuZlibBlock - 1) / kVtuZlibBlock;
+    const std::size_t at = bytes.size();
+    append_u64(bytes, blocks);
+    append_u64(bytes, kVtuZlibBlock);
+    append_u64(bytes, size % kVtuZlibBlock);
+    for (std::size_t b = 0; b < blocks; ++b) append_u64(bytes, 0);  // sizes, filled in below
+    const std::size_t head = bytes.size() - at;
+    std::string packed(compressBound(kVtuZlibBlock), '\0');
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t len = std::min(kVtuZlibBlock, size - b * kVtuZlibBlock);
+      uLongf packed_size = static_cast<uLongf>(packed.size());
+      if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size, data + b * kVtuZlibBlock,
+                    static_cast<uLong>(len), Z_BEST_SPEED) != Z_OK)
+        throw std::runtime_error("format_vtu: zlib compress2 failed");
+      bytes.append(packed.data(), packed_size);
+      const std::uint64_t word = packed_size;
+      std::memcpy(bytes.data() + at + 8 * (3 + b), &word, sizeof word);
+    }
+    return head;
+  }
+
+  VtuFormat f_;
+  std::string appended_;
+};
 
 // A 2 x n matrix as 3-component tuples (x y 0), one per line.
 void append_xy0(std::string& out, const Eigen::Matrix2Xd& m) {
@@ -98,17 +201,27 @@ void append_cells(std::string& out, const std::vector<std::array<int, N>>& cells
   }
 }
 
-// One value per line.
+// `components` values per line.
 template <typename T>
-void append_values(std::string& out, const std::vector<T>& values) {
-  for (const T value : values) {
+void append_values(std::string& out, const std::vector<T>& values, std::size_t components = 1) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
     if constexpr (std::is_same_v<T, double>) {
-      append_number(out, value);
+      append_number(out, values[i]);
     } else {
-      append_int(out, value);
+      append_int(out, values[i]);
     }
-    out += '\n';
+    out += (i + 1) % components == 0 ? '\n' : ' ';
   }
+}
+
+// A 2 x n matrix as 3 n values x y 0.
+std::vector<double> xy0(const Eigen::Matrix2Xd& m) {
+  std::vector<double> v(3 * static_cast<std::size_t>(m.cols()), 0.0);
+  for (Eigen::Index j = 0; j < m.cols(); ++j) {
+    v[3 * j] = m(0, j);
+    v[3 * j + 1] = m(1, j);
+  }
+  return v;
 }
 
 // Checks the names (non-empty, no control characters, not already in `seen`, the names used so
@@ -141,10 +254,12 @@ void check_cells(const std::vector<std::array<int, N>>& cells, const char* kind,
 
 }  // namespace
 
-std::string format_vtu(const VtuData& data) {
+std::string format_vtu(const VtuData& data, const VtuFormat& format) {
   const Eigen::Index n = data.points.cols();
   const std::size_t cells = data.quads.size() + data.tris.size();
   if (!std::isfinite(data.time)) invalid("time is not finite");
+  if (format.encoding == VtuEncoding::ascii && format.compression != VtuCompression::none)
+    invalid("compression needs the binary or base64 encoding");
   check_cells(data.quads, "quad", n);
   check_cells(data.tris, "triangle", n);
   const auto points = static_cast<std::size_t>(n);
@@ -153,12 +268,23 @@ std::string format_vtu(const VtuData& data) {
   std::set<std::string_view> point_names, cell_names;
   check_fields(data.point_vectors, "PointData", points, columns, point_names);
   check_fields(data.point_scalars, "PointData", points, entries, point_names);
+  check_fields(data.point_ints, "PointData", points, entries, point_names);
   check_fields(data.cell_scalars, "CellData", cells, entries, cell_names);
+  check_fields(data.cell_tensors, "CellData", 6 * cells, entries, cell_names);
   check_fields(data.cell_ints, "CellData", cells, entries, cell_names);
 
-  std::string out =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+  const bool ascii = format.encoding == VtuEncoding::ascii;
+  std::string out = "<?xml version=\"1.0\"?>\n";
+  if (ascii) {
+    out += "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
+  } else {
+    out += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"";
+    out += std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
+    out += "\" header_type=\"UInt64\"";
+    if (format.compression == VtuCompression::zlib) out += " compressor=\"vtkZLibDataCompressor\"";
+    out += ">\n";
+  }
+  out +=
       "  <UnstructuredGrid>\n"
       "    <FieldData>\n"
       "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
@@ -168,54 +294,53 @@ std::string format_vtu(const VtuData& data) {
   out += "    <Piece NumberOfPoints=\"" + std::to_string(n) + "\" NumberOfCells=\"" +
          std::to_string(cells) + "\">\n";
 
-  constexpr const char* in = "        ";  // DataArray indentation inside Piece sections
+  ArrayWriter arrays(format);
+  const auto doubles = [&](const char* name, int components, const std::vector<double>& v) {
+    arrays.add(out, "Float64", name, components, v.data(), v.size(),
+               [&](std::string& o) { append_values(o, v, static_cast<std::size_t>(components)); }, components == 6);
+  };
+  const auto ints = [&](const char* type, const char* name, const auto& v) {
+    arrays.add(out, type, name, 1, v.data(), v.size(), [&](std::string& o) { append_values(o, v); });
+  };
   out += "      <PointData>\n";
   for (const auto& [name, values] : data.point_vectors) {
-    open_array(out, in, "Float64", name, 3);
-    append_xy0(out, values);
-    close_array(out, in);
+    const std::vector<double> v = xy0(values);
+    arrays.add(out, "Float64", name, 3, v.data(), v.size(), [&](std::string& o) { append_xy0(o, values); });
   }
-  for (const auto& [name, values] : data.point_scalars) {
-    open_array(out, in, "Float64", name, 1);
-    append_values(out, values);
-    close_array(out, in);
-  }
+  for (const auto& [name, values] : data.point_scalars) doubles(name.c_str(), 1, values);
+  for (const auto& [name, values] : data.point_ints) ints("Int32", name.c_str(), values);
   out += "      </PointData>\n      <CellData>\n";
-  for (const auto& [name, values] : data.cell_scalars) {
-    open_array(out, in, "Float64", name, 1);
-    append_values(out, values);
-    close_array(out, in);
-  }
-  for (const auto& [name, values] : data.cell_ints) {
-    open_array(out, in, "Int32", name, 1);
-    append_values(out, values);
-    close_array(out, in);
-  }
+  for (const auto& [name, values] : data.cell_scalars) doubles(name.c_str(), 1, values);
+  for (const auto& [name, values] : data.cell_tensors) doubles(name.c_str(), 6, values);
+  for (const auto& [name, values] : data.cell_ints) ints("Int32", name.c_str(), values);
   out += "      </CellData>\n      <Points>\n";
-  open_array(out, in, "Float64", "Points", 3);
-  append_xy0(out, data.points);
-  close_array(out, in);
+  {
+    const std::vector<double> v = xy0(data.points);
+    arrays.add(out, "Float64", "Points", 3, v.data(), v.size(), [&](std::string& o) { append_xy0(o, data.points); });
+  }
   out += "      </Points>\n      <Cells>\n";
 
-  open_array(out, in, "Int32", "connectivity", 1);
-  append_cells(out, data.quads);
-  append_cells(out, data.tris);
-  close_array(out, in);
-  open_array(out, in, "Int64", "offsets", 1);
+  std::vector<std::int32_t> connectivity;
+  connectivity.reserve(4 * data.quads.size() + 3 * data.tris.size());
+  for (const auto& q : data.quads) connectivity.insert(connectivity.end(), q.begin(), q.end());
+  for (const auto& t : data.tris) connectivity.insert(connectivity.end(), t.begin(), t.end());
+  arrays.add(out, "Int32", "connectivity", 1, connectivity.data(), connectivity.size(), [&](std::string& o) {
+    append_cells(o, data.quads);
+    append_cells(o, data.tris);
+  });
+  std::vector<std::int64_t> offsets(cells);
+  std::vector<std::uint8_t> types(cells);
   std::int64_t offset = 0;
   for (std::size_t c = 0; c < cells; ++c) {
     offset += c < data.quads.size() ? 4 : 3;
-    append_int(out, offset);
-    out += '\n';
+    offsets[c] = offset;
+    types[c] = c < data.quads.size() ? vtk_quad : vtk_triangle;
   }
-  close_array(out, in);
-  open_array(out, in, "UInt8", "types", 1);
-  for (std::size_t c = 0; c < cells; ++c) {
-    append_int(out, c < data.quads.size() ? vtk_quad : vtk_triangle);
-    out += '\n';
-  }
-  close_array(out, in);
-  out += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+  ints("Int64", "offsets", offsets);
+  ints("UInt8", "types", types);
+  out += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
+  arrays.finish(out);
+  out += "</VTKFile>\n";
   return out;
 }
 

@@ -28,6 +28,11 @@ Surface make_surface(const Model& model, int body) {
 }
 
 double depth_inside(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
+  const double d = signed_distance(model, surf, u, x);
+  return d < 0.0 ? -d : 0.0;
+}
+
+double signed_distance(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
   bool in = false;
   double dist = std::numeric_limits<double>::infinity();
   for (const SurfaceSegment& sg : surf.segments) {
@@ -40,7 +45,7 @@ double depth_inside(const Model& model, const Surface& surf, const Eigen::Vector
     const double xi = l2 > 0.0 ? std::clamp((x - a).dot(e) / l2, 0.0, 1.0) : 0.0;
     dist = std::min(dist, (x - a - xi * e).norm());
   }
-  return in ? dist : 0.0;
+  return in ? -dist : dist;
 }
 
 }  // namespace ricochet

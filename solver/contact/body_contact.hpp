@@ -227,5 +227,8 @@ Box2 surface_box(const Surface& surf, const Pos& pos, double margin) {
 // Depth of point x inside the master body bounded by `surf` at displacements u: the distance to
 // the nearest segment if x is inside (even-odd crossing rule), else 0 [m].
 double depth_inside(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
+// The signed distance of x to the master body bounded by `surf` at displacements u: the distance
+// to the nearest segment, negative if x is inside (even-odd crossing rule) [m].
+double signed_distance(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
 
 }  // namespace ricochet

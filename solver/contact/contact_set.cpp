@@ -83,6 +83,33 @@ void finish_step(ContactSet& c, int iterations, bool converged) {
   c.total.iterations_max = std::max(c.total.iterations_max, iterations);
 }
 
+void node_contact_fields(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
+                         const Eigen::VectorXd& u, double* force, double* gap, int* status) {
+  const int n = model.num_nodes();
+  std::fill(force, force + 2 * n, 0.0);
+  std::fill(gap, gap + n, 0.0);
+  std::fill(status, status + n, static_cast<int>(kNodeNoCandidate));
+  for (std::size_t k = 0; k < c.candidates.size(); ++k) {
+    const ContactCandidate& cc = c.candidates[k];
+    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
+    const double g = cc.pair < 0 ? closest(obstacles[cc.obstacle], x).gap
+                                 : signed_distance(model, c.surfaces[cc.pair], u, x);
+    const int code = c.status[k] == ContactStatus::stick  ? kNodeStick
+                     : c.status[k] == ContactStatus::slip ? kNodeSlip
+                                                          : kNodeOpen;
+    gap[cc.node] = status[cc.node] == kNodeNoCandidate ? g : std::min(gap[cc.node], g);
+    status[cc.node] = std::max(status[cc.node], code);
+    if (c.status[k] == ContactStatus::open) continue;
+    const Vec2 nk = c.normal[k], t{nk.y(), -nk.x()};
+    const Vec2 r = c.reaction[k].n * nk + c.reaction[k].t * t;
+    const Stencil& st = c.stencil[k];
+    for (int j = 0; j < st.count; ++j) {
+      force[2 * st.node[j]] += st.coef[j] * r.x();
+      force[2 * st.node[j] + 1] += st.coef[j] * r.y();
+    }
+  }
+}
+
 double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
                    const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
                    const Eigen::VectorXd& u) {

@@ -250,6 +250,32 @@ void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_moti
 // step's solve (0 and true for the penalty springs).
 void finish_step(ContactSet& c, int iterations, bool converged);
 
+// What the contact set holds, per node, for a field snapshot (docs/outputs.md, fields/*.vtu).
+// Node status codes (the `contact_status` point array):
+enum NodeContactStatus : int {
+  kNodeNoCandidate = 0,  // the node is no contact candidate (an interior node, a prescribed one,
+                         // or a master body's node in a one-way pair)
+  kNodeOpen = 1,         // a candidate, every one of its contacts open in the last step
+  kNodeStick = 2,        // at least one of its contacts sticks, none slips
+  kNodeSlip = 3,         // at least one of its contacts slips (frictionless contacts slip)
+};
+// Fills, for every node i of the model (n = model.num_nodes()):
+//   force[2i], force[2i + 1]  the sum of the contact reactions acting on node i, in global axes
+//                             [N]: over every closed contact (status stick or slip, the ones
+//                             record() sums into normal_force), coef_j (r_n n + r_t t) for each
+//                             node j of its stencil, so a body pair's master nodes get their
+//                             share -(1 - xi) r, -xi r;
+//   gap[i]                    the smallest signed gap of node i over its candidates at the
+//                             positions X + u [m]: closest() for a rigid obstacle, the signed
+//                             distance to the master body (signed_distance(), body_contact.hpp)
+//                             for a pair; negative inside. 0 for a node that is no candidate;
+//   status[i]                 its NodeContactStatus, the strongest over its candidates' statuses.
+// The reactions, normals, stencils and statuses are those of the set's last step, read as they
+// are (whatever step the scheme last recorded). Allocates nothing; O(candidates) plus, for body
+// pairs, O(candidates x master segments).
+void node_contact_fields(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
+                         const Eigen::VectorXd& u, double* force, double* gap, int* status);
+
 // Largest depth of any candidate node behind its obstacle, or inside its pair's master body
 // (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this.
 double penetration(const Model& model, const std::vector<Obstacle>& obstacles,

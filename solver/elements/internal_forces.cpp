@@ -273,6 +273,60 @@ void cell_von_mises(const Model& model, const double* u, StressMeasure measure, 
   for_each_cell_stress(model, u, one_measure(measure), [&](int cell, const VonMises2& vm2) { out[cell] = std::sqrt(vm2[m]); });
 }
 
+void cell_tensors(const Model& model, const double* u, double* cauchy, double* green_lagrange) {
+  auto store = [&](int cell, const SymTensor6& sigma, const SymTensor6& strain) {
+    for (int k = 0; k < 6; ++k) {
+      cauchy[6 * cell + k] = sigma[k];
+      green_lagrange[6 * cell + k] = strain[k];
+    }
+  };
+  // One-point cells (Q4 with hourglass control, T3): the centroid's values.
+  auto one_point = [&]<int N>(const auto& blocks) {
+    for (const auto& b : blocks)
+      std::visit(
+          [&](const auto& mat) {
+            for (std::size_t e = 0; e < b.conn.size(); ++e) {
+              const Mat2 F = deformation_gradient<N>(gather<N>(u, b.conn[e]), b.geom[e].dndx);
+              SymTensor6 sigma, strain;
+              cauchy_and_green_lagrange(mat, F, mat.first_piola(F), F.determinant(), sigma, strain);
+              store(b.first_cell + static_cast<int>(e), sigma, strain);
+            }
+          },
+          b.material);
+  };
+  one_point.template operator()<4>(model.q4_hourglass);
+  one_point.template operator()<3>(model.t3);
+  // Q4 with 2x2 points: the mean over the points weighted by their volumes (Gauss weight x det J0
+  // x thickness), i.e. the cell's average by its own quadrature; the plain mean of the four
+  // points for a parallelogram.
+  for (const auto& b : model.q4_full)
+    std::visit(
+        [&](const auto& mat) {
+          for (std::size_t e = 0; e < b.conn.size(); ++e) {
+            const Grad4 ue = gather<4>(u, b.conn[e]);
+            SymTensor6 sigma{}, strain{};
+            double volume = 0.0;
+            for (int q = 0; q < 4; ++q) {
+              const Mat2 F = deformation_gradient<4>(ue, b.geom[e].dndx[q]);
+              SymTensor6 sq, eq;
+              cauchy_and_green_lagrange(mat, F, mat.first_piola(F), F.determinant(), sq, eq);
+              const double w = b.geom[e].vol[q];
+              volume += w;
+              for (int k = 0; k < 6; ++k) {
+                sigma[k] += w * sq[k];
+                strain[k] += w * eq[k];
+              }
+            }
+            for (int k = 0; k < 6; ++k) {
+              sigma[k] /= volume;
+              strain[k] /= volume;
+            }
+            store(b.first_cell + static_cast<int>(e), sigma, strain);
+          }
+        },
+        b.material);
+}
+
 StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress) {
   StressPeaks p;
   const int m = static_cast<int>(stress.measure);

@@ -81,6 +81,13 @@ ForceTotals internal_forces(const Model& model, const double* u, const double* v
 // [Pa]. `out` has model.num_cells() entries.
 void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out);
 
+// The Cauchy stress [Pa] and the Green-Lagrange strain [-] of each cell at u, as symmetric
+// tensors in VTK order (XX, YY, ZZ, XY, YZ, XZ; cauchy_and_green_lagrange(), stress.hpp): 6
+// values per global cell in `cauchy` and `green_lagrange` (6 model.num_cells() each). A cell's
+// value is the mean over its integration points weighted by their reference volumes (one-point
+// cells: the centroid's value). For field snapshots only: a pass of its own over the elements.
+void cell_tensors(const Model& model, const double* u, double* cauchy, double* green_lagrange);
+
 // The peaks internal_forces() tracks, by a stress pass alone (for the implicit scheme, whose
 // force passes are Newton iterates), and in the same pass what stress.sampled_max and
 // stress.cell_von_mises ask for. `contact_cell` null: no cell is on a contact boundary.

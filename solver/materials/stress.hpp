@@ -127,6 +127,35 @@ inline VonMises2 von_mises_squared(const Mat& mat, const Mat2& F, const Mat2& P,
   return out;
 }
 
+// A symmetric 3x3 tensor in VTK's order of components (XX, YY, ZZ, XY, YZ, XZ), the order
+// ParaView reads six-component arrays in. In 2D the YZ and XZ components are 0.
+using SymTensor6 = std::array<double, 6>;
+
+// The Cauchy stress sigma [Pa] and the Green-Lagrange strain E [-] at one integration point,
+// from the in-plane F, its P = mat.first_piola(F) and det F, with the material's out-of-plane
+// state (F33, S33):
+//   tau = P F^T (in-plane block, symmetrized), tau33 = F33^2 S33, J = det F F33,
+//   sigma = tau / J  (so sigma_zz = 0 in plane stress, where S33 = 0),
+//   E = (F^T F - I) / 2,  E_zz = (F33^2 - 1) / 2  (0 in plane strain, where F33 = 1; in plane
+//   stress the thickness stretch of the law, which eliminates F33 by S33 = 0).
+// The field output's per-cell tensors (cell_tensors(), internal_forces.hpp; docs/outputs.md);
+// not evaluated in the time step.
+template <class Mat>
+inline void cauchy_and_green_lagrange(const Mat& mat, const Mat2& F, const Mat2& P, double det_f, SymTensor6& sigma,
+                                      SymTensor6& strain) {
+  const auto o = mat.out_of_plane(F);
+  const double f33_2 = stretch33_squared(mat, F, o.stretch);
+  const double j = det_f * std::sqrt(f33_2);
+  const double t11 = P(0, 0) * F(0, 0) + P(0, 1) * F(0, 1);
+  const double t22 = P(1, 0) * F(1, 0) + P(1, 1) * F(1, 1);
+  const double t12 = 0.5 * (P(0, 0) * F(1, 0) + P(0, 1) * F(1, 1) + P(1, 0) * F(0, 0) + P(1, 1) * F(0, 1));
+  sigma = {t11 / j, t22 / j, f33_2 * o.pk2 / j, t12 / j, 0.0, 0.0};
+  const double c11 = F(0, 0) * F(0, 0) + F(1, 0) * F(1, 0);
+  const double c22 = F(0, 1) * F(0, 1) + F(1, 1) * F(1, 1);
+  const double c12 = F(0, 0) * F(0, 1) + F(1, 0) * F(1, 1);
+  strain = {0.5 * (c11 - 1.0), 0.5 * (c22 - 1.0), 0.5 * (f33_2 - 1.0), 0.5 * c12, 0.0, 0.0};
+}
+
 // Whether the squared equivalent at a point can exceed `threshold` [Pa^2], from a cheap upper
 // bound: vm(A)^2 = 3/2 |dev A|^2 <= 3/2 |A|^2, with |P F^T| <= |P| |F| for tau (and sigma =
 // tau / J), and |F^-1 P| <= |F| |P| / |det F| for S (|F^-1| = |F| / |det F| for a 2x2 matrix);

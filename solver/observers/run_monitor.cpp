@@ -312,22 +312,47 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   result_.diverged_step = s.step;
   result_.diverged_time = s.time;
   // The state it diverged in, as one more field snapshot (written like the others), so that it
-  // can be inspected; unless this step already has one, or the state is not finite (the VTU
-  // files hold finite values only: docs/outputs.md).
+  // can be inspected; unless this step already has one, or the state or its von Mises values
+  // are not finite (the VTU files hold finite values only: docs/outputs.md; the tensors and
+  // contact data have their non-finite values written as 0, snapshot()).
   if (result_.fields.empty() || result_.fields.back().step != s.step) {
-    FieldSnapshot f;
-    f.step = s.step;
-    f.time = s.time;
-    f.u = s.u;
-    f.v.resize(s.u.size());
-    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+    FieldSnapshot f = snapshot(s);
+    if (!f.u.allFinite() || !f.v.allFinite()) return;
     f.von_mises.assign(model_.num_cells(), 0.0);
-    if (f.u.allFinite() && f.v.allFinite()) {
-      cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
-      if (std::all_of(f.von_mises.begin(), f.von_mises.end(), [](double x) { return std::isfinite(x); }))
-        result_.fields.push_back(std::move(f));
-    }
+    cell_von_mises(model_, s.u.data(), settings_.stress_measure, f.von_mises.data());
+    if (std::all_of(f.von_mises.begin(), f.von_mises.end(), [](double x) { return std::isfinite(x); }))
+      result_.fields.push_back(std::move(f));
   }
+}
+
+FieldSnapshot RunMonitor::snapshot(const State& s) const {
+  FieldSnapshot f;
+  f.step = s.step;
+  f.time = s.time;
+  f.u = s.u;
+  f.v.resize(s.u.size());
+  for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
+  if (!f.u.allFinite() || !f.v.allFinite()) return f;  // diverge() keeps no snapshot of it
+  f.cauchy.resize(6 * static_cast<std::size_t>(model_.num_cells()));
+  f.green_lagrange.resize(f.cauchy.size());
+  cell_tensors(model_, s.u.data(), f.cauchy.data(), f.green_lagrange.data());
+  contact_fields(s, f);
+  // A value that is not finite, which only a state outside the laws' range gives (an inverted
+  // cell, a plane-stress St Venant-Kirchhoff cell stretched beyond a real thickness stretch,
+  // F33^2 < 0) or a diverged step's contact solve, is written as 0 (docs/outputs.md).
+  for (auto* a : {&f.cauchy, &f.green_lagrange, &f.contact_force, &f.contact_gap})
+    for (double& x : *a)
+      if (!std::isfinite(x)) x = 0.0;
+  return f;
+}
+
+void RunMonitor::contact_fields(const State& s, FieldSnapshot& f) const {
+  const std::size_t n = static_cast<std::size_t>(model_.num_nodes());
+  f.contact_force.resize(2 * n);
+  f.contact_gap.resize(n);
+  f.contact_status.resize(n);
+  node_contact_fields(model_, settings_.obstacles, contact_, s.u, f.contact_force.data(), f.contact_gap.data(),
+                      f.contact_status.data());
 }
 
 bool RunMonitor::observe(const State& s, double kinetic0) {
@@ -385,13 +410,8 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     else ++next_sample_;
   }
   if (field_at(n)) {
-    FieldSnapshot f;
-    f.step = n;
-    f.time = s.time;
-    f.u = s.u;
-    f.v.resize(s.u.size());
-    for (int d = 0; d < f.v.size(); ++d) f.v[d] = velocity_at_step(s, d);
     if (sampled_step_ != n) throw std::logic_error("RunMonitor: a field snapshot without its stress pass");
+    FieldSnapshot f = snapshot(s);
     f.von_mises = field_cells_;  // of this step's force (or stress) pass
     result_.fields.push_back(std::move(f));
     if (variable_) planned_field_ = false;

@@ -70,6 +70,11 @@ class RunMonitor {
  private:
   // The largest node displacement from u0_ (RunResult::displacement_max, drift_max).
   void track_displacement(const State& s);
+  // A field snapshot of the state s (t_n): u, v_n, the cells' tensors and the nodes' contact
+  // data (contact_fields()); the von Mises values are the caller's. Snapshot steps only.
+  FieldSnapshot snapshot(const State& s) const;
+  // The nodes' contact force, gap and status from what the contact set holds now.
+  void contact_fields(const State& s, FieldSnapshot& f) const;
 
   const Model& model_;
   const RunSettings& settings_;

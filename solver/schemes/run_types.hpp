@@ -107,12 +107,20 @@ struct History {
   std::size_t column(const std::string& name) const;  // throws std::out_of_range
 };
 
+// One field snapshot (docs/outputs.md, fields/*.vtu): nodes and cells in the model's order.
 struct FieldSnapshot {
   long step = 0;
   double time = 0.0;               // [s]
   Eigen::VectorXd u;               // 2n [m]
   Eigen::VectorXd v;               // 2n, v_n [m/s]
   std::vector<double> von_mises;   // per cell [Pa]
+  // Per cell, 6 values each (XX, YY, ZZ, XY, YZ, XZ): the Cauchy stress [Pa] and the
+  // Green-Lagrange strain [-] (cell_tensors(), internal_forces.hpp).
+  std::vector<double> cauchy, green_lagrange;
+  // Per node (node_contact_fields(), contact_set.hpp): the contact force, 2 per node, global
+  // axes [N]; the signed gap [m]; the NodeContactStatus code.
+  std::vector<double> contact_force, contact_gap;
+  std::vector<int> contact_status;
 };
 
 // Where and when a von Mises peak was reached: the largest value over every step of a run.
