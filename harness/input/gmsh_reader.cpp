@@ -516,6 +516,10 @@ Mesh read_gmsh(const std::filesystem::path& file) {
   if (std::filesystem::is_directory(file, ec) || !in) throw InputError(name + ": cannot open");
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(name + ": cannot read");
+  return parse_gmsh(std::move(text), name);
+}
+
+Mesh parse_gmsh(std::string text, const std::string& name) {
   return Reader(Lexer(name, std::move(text))).read();
 }
 
