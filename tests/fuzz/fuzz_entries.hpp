@@ -146,11 +146,13 @@ inline bool csv_entry(std::string_view data) {
 
 // The table the gates of a gate input are evaluated on when the input brings none.
 inline constexpr std::string_view kGateTable =
-    "run,group,status,scheme,mesh,time.dt,energy_error_max,penetration_max,wall_time,"
-    "final.momentum_x\n"
-    "table1/a,table1,ok,semi_explicit,M1,1e-05,0.01,0,1.5,0.09\n"
-    "table1/b,table1,diverged,implicit,M2,1e-4,nan,inf,3,\n"
-    "friction/c,friction,ok,implicit,M1,0.000001,-0.5,1e-12,2.5e3,-1\n";
+    "run_id,group,kind,status,reason,case,mesh,time.dt,scheme,summary.scheme,energy_error_max,"
+    "penetration_max,contact_iterations.steps_with_contact,wall_seconds,final.momentum_x\n"
+    "table1/0,table1,run,ok,,oblique_plate,M1,1e-05,semi_explicit,semi_explicit,0.01,0,448,1.5,0.09\n"
+    "table1/1,table1,run,diverged,energy growth,oblique_plate,M2,1e-4,implicit,implicit,nan,inf,,3,\n"
+    "friction/0,friction,run,ok,,bar_wall,M1,0.000001,implicit,implicit,-0.5,1e-12,800,2.5e3,-1\n"
+    "friction/1,friction,run,failed,\"bad, input\",bar_wall,M1,1e-6,explicit_penalty,explicit_penalty,"
+    "0,0,0,0,0\n";
 
 // The gate input: a gate file's TOML text, optionally followed by a line "%%csv" and the CSV
 // table to evaluate its gates on (else kGateTable). parse_gates, then evaluate_gates, describe

@@ -154,6 +154,7 @@ node_set = "bottom"
     case_dict |= {f"[{t}]" for t in case_words["tables"]} | {f"[[{t}]]" for t in case_words["arrays"]}
     case_dict |= {f'"{w}"' for w in case_words["words"]}
     case_dict |= {"--set ", " = ", "[0]", ".", "=", "\n", "auto", "true", "false", "1e-6", "inf", "nan",
+                  "9007199254740993", "9223372036854775807", "1e-300", "1e300", "1e308", "-0.0", "100000",
                   "gmsh_quad_2x1_v22.msh", "gmsh_quad_2x1_v41.msh", "gmsh_mixed_v41.msh"}
     write_dict(out / "case.dict", case_dict)
 
