@@ -7,14 +7,15 @@ writes OUT_DIR/seeds/{case,gmsh,csv,gates}/ (one file per seed) and OUT_DIR/{cas
 gates}.dict (libFuzzer -dict= files). Nothing of it is committed: ci/fuzz makes it afresh in
 build-fuzz/. Sources (docs/reliability.md, Fuzzing):
 - case: every case file under cases/ (a file with a [meshes] table; full-line comments
-  dropped, generated meshes coarsened to at most 4 cells across), and for every sweep file under cases/ the runs it would start, as their base case
+  dropped, generated meshes coarsened to at most 4 cells across; a variant with integral
+  numbers written as integers), and for every sweep file under cases/ the runs it would start, as their base case
   with the sweep's `set` and the first value of each `cross` key as leading "--set KEY=VALUE" lines
   (sweep files are not cases: read_case never sees one), and a case on a Gmsh mesh of
   tests/data;
 - gmsh: tests/data/*.msh;
 - csv: a few hand-made tables (quotes, CRLF, byte-order mark, nan/inf), and the summary.csv and
   history.csv files that ci/test's sweeps wrote under BUILD_DIR (default build/), if any;
-- gates: ci/gates/*.toml, and each one followed by "%%csv" and the summary.csv of the sweep
+- gates: ci/gates/*.toml (and the integer variant, as for cases), and each one followed by "%%csv" and the summary.csv of the sweep
   that ci/test checks with it, when that exists.
 """
 import pathlib
@@ -35,6 +36,22 @@ def coarse(text):
     100 to 10000 times (the sweeps' finest meshes take seconds under the sanitizers)."""
     return re.sub(r"^(\s*(?:nx|ny|n)\s*=\s*)(\d+)", lambda m: m.group(1) + str(min(int(m.group(2)), 4)),
                   text, flags=re.M)
+
+
+def integral(text):
+    """The text with every integral float literal written as an integer (2.0e11 -> 200000000000,
+    8000.0 -> 8000): a variant seed whose numbers libFuzzer's integer mutations (ChangeASCIIInt)
+    can grow past 2^53 and 2^63, where TOML integers stop being doubles or stop being valid."""
+    def repl(m):
+        lit = m.group(0)
+        if "." not in lit and "e" not in lit.lower():
+            return lit
+        try:
+            x = float(lit)
+        except ValueError:
+            return lit
+        return str(int(x)) if x.is_integer() and abs(x) < 1e18 else lit
+    return re.sub(r"(?<![\w.\"-])-?\d+(?:\.\d+)?(?:[eE][+-]?\d+)?(?![\w.\"])", repl, text)
 
 
 def toml_value(v):
@@ -105,6 +122,8 @@ def main():
     cases = {f: coarse(strip_comments(text)) for f, text in cases.items()}
     for f, text in cases.items():
         seed("case", "case-" + str(f.relative_to(ROOT / "cases")), text)
+        if integral(text) != text:
+            seed("case", "case-int-" + str(f.relative_to(ROOT / "cases")), integral(text))
     for f, doc in sweeps:
         rel = str(f.relative_to(ROOT / "cases"))
         top_set = doc.get("set", {})
@@ -155,7 +174,7 @@ node_set = "bottom"
     case_dict |= {f'"{w}"' for w in case_words["words"]}
     case_dict |= {"--set ", " = ", "[0]", ".", "=", "\n", "auto", "true", "false", "1e-6", "inf", "nan",
                   "9007199254740993", "9223372036854775807", "1e-300", "1e300", "1e308", "-0.0", "100000",
-                  "gmsh_quad_2x1_v22.msh", "gmsh_quad_2x1_v41.msh", "gmsh_mixed_v41.msh"}
+                  "gmsh_quad_2x1_v22.msh", "gmsh_quad_2x1_v41.msh", "gmsh_mixed_v41.msh", "/dev/zero", "/dev/stdin"}
     write_dict(out / "case.dict", case_dict)
 
     # ---- gmsh ----
@@ -190,6 +209,8 @@ node_set = "bottom"
         text = f.read_text()
         keys_of(tomllib.loads(text), gate_words)
         seed("gates", f.name, strip_comments(text))
+        if integral(strip_comments(text)) != strip_comments(text):
+            seed("gates", "int-" + f.name, integral(strip_comments(text)))
         s = summaries.get(str(f.relative_to(ROOT)))
         if s and s.is_file():
             seed("gates", f.stem + "-with-table.toml", strip_comments(text) + "%%csv\n" + s.read_text())
