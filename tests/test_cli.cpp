@@ -289,7 +289,7 @@ TEST_F(CliTest, RejectsUnknownKey) {
 TEST_F(CliTest, UnknownNamesSuggestTheLikelyOne) {
   expect_rejected(replace(kGood, "dt = 1e-5", "dt = 1e-5\ndtt = 2"), "",
                   {"time.dtt: unknown key (did you mean \"dt\"?); allowed here:"});
-  expect_rejected(replace(kGood, "young = 1e6", "yuong = 1e6"), "", {"bodies[0].material.young: missing required key (the table has \"yuong\": a typo?)"});
+  expect_rejected(replace(kGood, "young = 1e6", "yuong = 1e6"), "", {"bodies[0].material.yuong: unknown key (did you mean \"young\"? it is required here and missing)"});
   expect_rejected(kGood, "--set time.ennd=1e-3", {"time.ennd", "did you mean \"end\"?"});
   expect_rejected(replace(kGood, "dt = 1e-5", "dt = 1e-5\nzzzzzz = 2"), "", {"time.zzzzzz: unknown key; allowed here:"});
   expect_rejected(replace(kGood + "[meshes.fine]\ngenerator = \"rectangle\"\nwidth = 0.1\nheight = 0.05\nnx = 8\nny = 4\n",
