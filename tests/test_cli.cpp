@@ -1,7 +1,7 @@
 // The `ricochet` program end to end: `run`'s documented outputs on a good case; for each class of
 // bad input a single-line error naming the file and the key or line, exit status 2, and no
 // output folder; the command line of every command (help, unknown options, every option shown);
-// outputs that are written completely or not at all.
+// `--out` values that name no folder; outputs that are written completely or not at all.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -617,6 +617,38 @@ TEST_F(CliTest, TopLevelHelpListsEveryCommandsOptions) {
     EXPECT_EQ(listed, own) << command;
   }
   EXPECT_EQ(run("--version").output, std::string("ricochet ") + RICOCHET_VERSION + "\n");
+}
+
+// `--out` must name a folder: an empty value (which used to fall back on results/<name>) and a
+// path that is, or is inside, an existing file are bad input of run, sweep and stability: one
+// line naming the option, exit 2, nothing written.
+TEST_F(CliTest, OutMustNameAFolder) {
+  const std::string c = write("case.toml", kGood);
+  const std::string s = write("sweep.toml", "base = \"case.toml\"\n[[group]]\n");
+  const std::string file = write("file.txt", "not a folder\n");
+  const fs::path work = dir_ / "work";
+  fs::create_directories(work);
+  for (const std::string& command : {"run " + c, "sweep " + s, "stability " + c}) {
+    for (const std::string& out : {std::string("''"), std::string("--out=")}) {
+      const std::string args = command + (out == "''" ? " --out ''" : " --out=");
+      const Outcome o = run(args, "cd '" + work.string() + "' &&");
+      EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+      EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+      EXPECT_NE(o.output.find("--out"), std::string::npos) << o.output;
+      EXPECT_TRUE(fs::is_empty(work)) << args << " wrote into the working folder";
+      fs::remove_all(work);
+      fs::create_directories(work);
+    }
+    for (const std::string& out : {file, file + "/sub"}) {
+      const std::string args = command + " --out " + out;
+      const Outcome o = run(args);
+      EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+      EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+      EXPECT_NE(o.output.find("--out"), std::string::npos) << o.output;
+      EXPECT_NE(o.output.find(file), std::string::npos) << o.output;
+      EXPECT_TRUE(fs::is_regular_file(file));
+    }
+  }
 }
 
 namespace {

@@ -216,8 +216,8 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
   if (options.threads && (*options.threads < 0 || *options.threads > kMaxThreads))
     throw InputError("ricochet sweep: --threads: expected an integer in [0, " + std::to_string(kMaxThreads) + "]");
   check_runs(spec, runs);
-  if (fs::exists(options.out_dir) && !fs::is_directory(options.out_dir))
-    throw InputError("ricochet sweep: --out " + options.out_dir.string() + ": not a folder");
+  if (const std::string problem = output_folder_problem(options.out_dir); !problem.empty())
+    throw InputError("ricochet sweep: --out " + options.out_dir.string() + ": " + problem);
   Sweep s(spec, runs, options);
   return s.run();
 }
