@@ -1166,3 +1166,58 @@ reference = false
     expect_metrics(t3.row(id), "floor_", floor3, floored);
   EXPECT_NE(t3.row("semi/000-time.dt=1e-5").at("floor_energy"), semi.at("floor_energy"));
 }
+
+// ---- resume -------------------------------------------------------------------------------------
+
+namespace {
+
+std::string text_of(const fs::path& p) {
+  std::stringstream s;
+  s << std::ifstream(p).rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+// A summary.json that a resumed sweep reads is checked: a value of the wrong type in a key the
+// sweep reads makes the run not done, so it is run again, with a note naming the file and key.
+TEST_F(SweepTest, ResumeRerunsARunWhoseSummaryIsInvalid) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5] }
+)";
+  ASSERT_EQ(run(sweep).executed, 2u);
+  const fs::path s = out() / "runs" / "g" / "000-time.dt=1e-5" / "summary.json";
+  const std::string good = text_of(s);
+  auto edit = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto at = t.find(from);
+    if (at == std::string::npos) throw std::logic_error("test setup: '" + from + "' not in summary.json");
+    return t.replace(at, from.size(), to);
+  };
+  const std::string wall = good.substr(good.find("\"wall_seconds\": "), good.find(',', good.find("\"wall_seconds\": ")) - good.find("\"wall_seconds\": "));
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"wall_seconds", edit(wall, "\"wall_seconds\": \"x\"")},
+      {"cpu_seconds", edit("\"cpu_seconds\": ", "\"cpu_seconds\": null, \"was\": ")},
+      {"status", edit("\"status\": \"ok\"", "\"status\": 5")},
+      {"status", edit("\"status\": \"ok\"", "\"status\": \"fine\"")},
+      {"diverged", edit("\"diverged\": null", "\"diverged\": \"no\"")},
+      {"steps", edit("\"steps\": ", "\"steps\": -3, \"was\": ")},
+      {"not a JSON object", "[1, 2]"},
+  };
+  for (const auto& [key, text] : bad) {
+    SCOPED_TRACE(key + ": " + text.substr(0, 80));
+    std::ofstream(s) << text;
+    log_.str("");
+    const SweepOutcome o = run(sweep);
+    EXPECT_EQ(o.resumed, 1u);
+    EXPECT_EQ(o.executed, 1u);
+    EXPECT_NE(log_.str().find(s.string() + ": " + key), std::string::npos) << log_.str();
+    EXPECT_NE(log_.str().find("run again"), std::string::npos) << log_.str();
+    const Json now = read_json_file(s);
+    EXPECT_TRUE(now.at("wall_seconds").is_number());
+    EXPECT_EQ(now.at("status").get<std::string>(), "ok");
+  }
+}

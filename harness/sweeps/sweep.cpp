@@ -43,10 +43,13 @@ class Sweep {
 
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       RunRecord& rec = recs_[i];
-      if (!opt_.force && plan_.load_finished(i, rec)) {
+      std::string note;
+      if (!opt_.force && plan_.load_finished(i, rec, note)) {
         rec.state = RunRecord::State::done;
         rec.resumed = true;
         ++out_.resumed;
+      } else if (!note.empty()) {
+        *log_ << "sweep " << spec_.name << ": " << note << "; run again" << std::endl;
       }
     }
     out_.total = runs_.size();

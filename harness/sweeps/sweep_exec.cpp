@@ -157,13 +157,17 @@ std::optional<Json> outcome(const Exit& e, const fs::path& dir, RunRecord& rec) 
     return std::nullopt;
   }
   if (e.code == 0 || e.code == 3) {
+    std::string problem;
     try {
-      return read_json_file(dir / "summary.json");
+      Json s = read_json_file(dir / "summary.json");
+      problem = summary_problem(s);
+      if (problem.empty()) return s;
     } catch (const JsonParseError& err) {
-      rec.status = "failed";
-      rec.reason = "exit " + std::to_string(e.code) + " without a readable summary.json: " + err.what();
-      return std::nullopt;
+      problem = err.what();
     }
+    rec.status = "failed";
+    rec.reason = "exit " + std::to_string(e.code) + " without a valid summary.json: " + problem;
+    return std::nullopt;
   }
   rec.status = "failed";
   rec.reason = "exit " + std::to_string(e.code) + (line.empty() ? std::string() : ": " + line);
