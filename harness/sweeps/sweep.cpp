@@ -40,6 +40,12 @@ class Sweep {
     started_at_ = utc_now();
     fs::create_directories(opt_.out_dir);
     lock();
+    // A run of an interrupted sweep that still writes its folder (it holds the folder's
+    // run.lock) must end before the folder is read or written.
+    for (std::size_t i = 0; i < runs_.size(); ++i)
+      if (fs::exists(plan_.folder(i) / "run.lock")) {
+        const RunFolderLock ended(plan_.folder(i), opt_.writer_wait, *log_, "sweep " + spec_.name);
+      }
 
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       RunRecord& rec = recs_[i];
