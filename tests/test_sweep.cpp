@@ -1294,7 +1294,7 @@ void expect_complete_run_folder(const fs::path& f) {
 // sweep's run ends with it (no orphan keeps writing), the resumed sweep reuses the finished run
 // and runs each other run once, in one process per folder, and every run folder ends complete.
 TEST_F(SweepTest, SigkilledSweepLeavesNoOrphanAndResumesWithOneWriterPerRun) {
-  write("slow.toml", slow_case(0.15));
+  write("slow.toml", slow_case(0.25));
   const std::string file = write("kill.toml", R"(
 name = "kill"
 base = "slow.toml"
@@ -1339,7 +1339,8 @@ cross = { "output.interval" = [1e-3, 2e-3, 4e-3] }
       exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
       break;
     }
-    const bool settled = Clock::now() - killed > std::chrono::milliseconds(300);
+    // A run killed with its sweep takes a moment to end; one still there 0.5 s later is an orphan.
+    const bool settled = Clock::now() - killed > std::chrono::milliseconds(500);
     for (const Process& p : processes_using(out())) {
       if (p.pid == resumed || p.argv.size() < 2 || p.argv[1] != "run") continue;
       if (p.ppid == resumed) writers[p.out()].insert(p.pid);
