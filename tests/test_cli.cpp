@@ -1,6 +1,7 @@
 // The `ricochet` program end to end: `run`'s documented outputs on a good case; for each class of
 // bad input a single-line error naming the file and the key or line, exit status 2, and no
-// output folder; the command line of every command (help, unknown options, every option shown).
+// output folder; the command line of every command (help, unknown options, every option shown);
+// `--out` values that name no folder; outputs that are written completely or not at all.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -25,8 +26,9 @@ struct Outcome {
   std::string output;  // stdout and stderr
 };
 
-Outcome run(const std::string& args) {
-  const std::string cmd = std::string(RICOCHET_BINARY) + " " + args + " 2>&1";
+// `ricochet ARGS` through /bin/sh, after the shell commands `prefix` (e.g. "cd DIR &&").
+Outcome run(const std::string& args, const std::string& prefix = "") {
+  const std::string cmd = prefix + " " + std::string(RICOCHET_BINARY) + " " + args + " 2>&1";
   Outcome o;
   FILE* p = popen(cmd.c_str(), "r");
   std::array<char, 4096> buf{};
@@ -289,7 +291,7 @@ TEST_F(CliTest, RejectsUnknownKey) {
 TEST_F(CliTest, UnknownNamesSuggestTheLikelyOne) {
   expect_rejected(replace(kGood, "dt = 1e-5", "dt = 1e-5\ndtt = 2"), "",
                   {"time.dtt: unknown key (did you mean \"dt\"?); allowed here:"});
-  expect_rejected(replace(kGood, "young = 1e6", "yuong = 1e6"), "", {"bodies[0].material.young: missing required key (the table has \"yuong\": a typo?)"});
+  expect_rejected(replace(kGood, "young = 1e6", "yuong = 1e6"), "", {"bodies[0].material.yuong: unknown key (did you mean \"young\"? it is required here and missing)"});
   expect_rejected(kGood, "--set time.ennd=1e-3", {"time.ennd", "did you mean \"end\"?"});
   expect_rejected(replace(kGood, "dt = 1e-5", "dt = 1e-5\nzzzzzz = 2"), "", {"time.zzzzzz: unknown key; allowed here:"});
   expect_rejected(replace(kGood + "[meshes.fine]\ngenerator = \"rectangle\"\nwidth = 0.1\nheight = 0.05\nnx = 8\nny = 4\n",
@@ -615,4 +617,84 @@ TEST_F(CliTest, TopLevelHelpListsEveryCommandsOptions) {
     EXPECT_EQ(listed, own) << command;
   }
   EXPECT_EQ(run("--version").output, std::string("ricochet ") + RICOCHET_VERSION + "\n");
+}
+
+// `--out` must name a folder: an empty value (which used to fall back on results/<name>) and a
+// path that is, or is inside, an existing file are bad input of run, sweep and stability: one
+// line naming the option, exit 2, nothing written.
+TEST_F(CliTest, OutMustNameAFolder) {
+  const std::string c = write("case.toml", kGood);
+  const std::string s = write("sweep.toml", "base = \"case.toml\"\n[[group]]\n");
+  const std::string file = write("file.txt", "not a folder\n");
+  const fs::path work = dir_ / "work";
+  fs::create_directories(work);
+  for (const std::string& command : {"run " + c, "sweep " + s, "stability " + c}) {
+    for (const std::string& out : {std::string("''"), std::string("--out=")}) {
+      const std::string args = command + (out == "''" ? " --out ''" : " --out=");
+      const Outcome o = run(args, "cd '" + work.string() + "' &&");
+      EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+      EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+      EXPECT_NE(o.output.find("--out"), std::string::npos) << o.output;
+      EXPECT_TRUE(fs::is_empty(work)) << args << " wrote into the working folder";
+      fs::remove_all(work);
+      fs::create_directories(work);
+    }
+    for (const std::string& out : {file, file + "/sub"}) {
+      const std::string args = command + " --out " + out;
+      const Outcome o = run(args);
+      EXPECT_EQ(o.status, 2) << args << ": " << o.output;
+      EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+      EXPECT_NE(o.output.find("--out"), std::string::npos) << o.output;
+      EXPECT_NE(o.output.find(file), std::string::npos) << o.output;
+      EXPECT_TRUE(fs::is_regular_file(file));
+    }
+  }
+}
+
+namespace {
+
+// What a reader of an output folder may see: every output of a run or none of them.
+void expect_all_or_nothing(const fs::path& out, const Outcome& o) {
+  const bool summary = fs::is_regular_file(out / "summary.json");
+  EXPECT_EQ(fs::exists(out / "history.csv"), summary) << o.output;
+  EXPECT_EQ(fs::exists(out / "fields"), summary) << o.output;
+  EXPECT_EQ(o.status == 0, summary) << o.output;
+  if (o.status != 0) {
+    EXPECT_EQ(o.status, 1) << o.output;
+    EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+    EXPECT_EQ(o.output.rfind("ricochet: error: cannot write '" + out.string(), 0), 0u) << o.output;
+  }
+  if (fs::is_directory(out))
+    for (const auto& e : fs::directory_iterator(out)) {
+      const std::string name = e.path().filename().string();
+      EXPECT_NE(name.rfind(".staging", 0), 0u) << name << " left behind";
+    }
+}
+
+}  // namespace
+
+// A run whose outputs cannot all be written leaves none of them (a reader never sees
+// history.csv or fields/ without their summary.json) and says why in one line, exit 1.
+TEST_F(CliTest, RunOutputsAreAllOrNothing) {
+  const std::string c = write("case.toml", kGood);
+  const fs::path o = out();
+  // summary.json's temporary name taken by a folder.
+  fs::create_directories(o / "summary.json.tmp");
+  expect_all_or_nothing(o, run("run " + c + " --out " + o.string() + " --quiet"));
+  fs::remove_all(o);
+  // summary.json itself a folder that cannot be replaced.
+  fs::create_directories(o / "summary.json" / "x");
+  const Outcome s = run("run " + c + " --out " + o.string() + " --quiet");
+  EXPECT_EQ(s.status, 1) << s.output;
+  expect_all_or_nothing(o, s);
+  EXPECT_NE(s.output.find("summary.json"), std::string::npos) << s.output;
+  fs::remove_all(o);
+  // A full disk, as a file size limit of 20 kB: history.csv fits, the field file does not. An
+  // earlier run's complete outputs in the folder are not mixed with the new ones.
+  ASSERT_EQ(run("run " + c + " --out " + o.string() + " --quiet").status, 0);
+  const Outcome f = run("run " + c + " --out " + o.string() + " --quiet --set meshes.m.nx=40 --set meshes.m.ny=20",
+                        "trap '' XFSZ; ulimit -f 40;");
+  EXPECT_EQ(f.status, 1) << f.output;
+  EXPECT_NE(f.output.find("File too large"), std::string::npos) << f.output;
+  expect_all_or_nothing(o, f);
 }

@@ -726,7 +726,7 @@ TEST(GateFile, RejectsBadFilesNamingFileLineAndKey) {
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\ncolumn = \"\"\nlimit = 1\n",
                   {"ci/gates/bad.toml:4: gate[0].column: expected a column name"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\ncolumn = \"a\"\nlimit = \"0.02\"\n",
-                  {"ci/gates/bad.toml:5: gate[0].limit: expected a number"});
+                  {"ci/gates/bad.toml:5: gate[0].limit: expected a finite number; got a string"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"max\"\ncolumn = \"a\"\n",
                   {"gate[0].limit: missing required key"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"count\"\nmax = 0\nallow_empty = true\n",
@@ -751,7 +751,7 @@ TEST(GateFile, RejectsBadFilesNamingFileLineAndKey) {
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"pattern\"\ncells = []\n",
                   {"ci/gates/bad.toml:4: gate[0].cells: expected at least one cell"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"pattern\"\ncells = [ { where = { mesh = \"M1\" }, expected = \"ok\" } ]\n",
-                  {"ci/gates/bad.toml:4: gate[0].cells[0].expect: missing required key"});
+                  {"ci/gates/bad.toml:4: gate[0].cells[0].expected: unknown key (did you mean \"expect\"? it is required here and missing)"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"pattern\"\ncells = [ { expect = \"ok\" } ]\n",
                   {"gate[0].cells[0].where: missing required key"});
   expect_rejected("[[gate]]\nname = \"x\"\nkind = \"count\"\nmax = 0\n[[gate]]\nname = \"x\"\nkind = \"count\"\nmax = 1\n",

@@ -2,20 +2,31 @@
 // with one-line errors and nothing written, summary.csv, the JSON reader, and the execution of
 // small sweeps of a tiny case with the real `ricochet` program: statuses, failures, resume,
 // repeats, errors against a group's reference runs, and errors against a shared [reference]
-// with its check run (the oblique plate, shortened).
+// with its check run (the oblique plate, shortened); a sweep killed by SIGKILL and resumed at
+// once (no orphaned run, one writer per run folder), the run folders' locks, and summary.json
+// files that a resumed sweep must not trust.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <omp.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <toml++/toml.h>
@@ -1165,4 +1176,303 @@ reference = false
   for (const char* id : {"reference/converged-check", "semi/000-time.dt=1e-5", "semi/001-time.dt=5e-6"})
     expect_metrics(t3.row(id), "floor_", floor3, floored);
   EXPECT_NE(t3.row("semi/000-time.dt=1e-5").at("floor_energy"), semi.at("floor_energy"));
+}
+
+// ---- interruption and resume (docs/reliability.md, "Interruption and resume") ---------------------
+
+namespace {
+
+
+// The tiny plate on a 40 x 20 mesh with one thread: a run of about a second per 0.1 s of
+// simulated time, long enough to be killed in the middle.
+std::string slow_case(double end) {
+  std::string s = kCase;
+  s.replace(s.find("nx = 4"), 6, "nx = 40");
+  s.replace(s.find("ny = 2"), 6, "ny = 20");
+  s.replace(s.find("end = 2e-3"), 10, "end = " + std::to_string(end));
+  s.replace(s.find("interval = 1e-4"), 15, "interval = 1e-3\nfields = [0.01]");
+  return "threads = 1\n" + s;
+}
+
+// Starts `args` (args[0] the program) with stdout and stderr to `log`.
+pid_t start_process(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<std::string> a = args;
+  std::vector<char*> argv;
+  for (auto& x : a) argv.push_back(x.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("cannot start " + args[0]);
+  return pid;
+}
+
+// A live process of this machine: its parent, its state (R, S, Z, ...) and its arguments.
+struct Process {
+  pid_t pid = 0, ppid = 0;
+  char state = '?';
+  std::vector<std::string> argv;
+  // The value of its --out option, if any.
+  std::string out() const {
+    for (std::size_t i = 0; i + 1 < argv.size(); ++i)
+      if (argv[i] == "--out") return argv[i + 1];
+    return {};
+  }
+};
+
+// The processes with an argument that starts with `dir` (a zombie has no arguments: not listed).
+std::vector<Process> processes_using(const fs::path& dir) {
+  std::vector<Process> found;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/proc", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    Process p;
+    p.pid = std::stoi(name);
+    std::stringstream cmd;
+    cmd << std::ifstream(e.path() / "cmdline").rdbuf();
+    std::string word;
+    while (std::getline(cmd, word, '\0')) p.argv.push_back(word);
+    bool uses = false;
+    for (const auto& w : p.argv) uses = uses || w.rfind(dir.string(), 0) == 0;
+    if (!uses) continue;
+    std::stringstream stat;
+    stat << std::ifstream(e.path() / "stat").rdbuf();
+    const std::string st = stat.str();
+    const auto close = st.rfind(')');
+    if (close == std::string::npos) continue;  // it ended meanwhile
+    std::istringstream rest(st.substr(close + 1));
+    rest >> p.state >> p.ppid;
+    if (p.state != 'Z') found.push_back(p);
+  }
+  return found;
+}
+
+std::string text_of(const fs::path& p) {
+  std::stringstream s;
+  s << std::ifstream(p).rdbuf();
+  return s.str();
+}
+
+// Checks that a finished run folder holds one complete, consistent set of outputs: summary.json
+// ok, its history_rows the rows of history.csv (times strictly increasing: no row written twice),
+// its field_files the .vtu files of fields/, and nothing half-written or staged.
+void expect_complete_run_folder(const fs::path& f) {
+  SCOPED_TRACE(f.string());
+  ASSERT_TRUE(fs::is_regular_file(f / "summary.json"));
+  for (const char* file : {"history.csv", "overrides.json", "stderr.txt"}) EXPECT_TRUE(fs::is_regular_file(f / file)) << file;
+  const Json s = read_json_file(f / "summary.json");
+  EXPECT_EQ(s.at("status").get<std::string>(), "ok");
+  const auto lines = parse_csv(text_of(f / "history.csv"));
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_EQ(static_cast<long>(lines.size()) - 1, s.at("history_rows").get<long>());
+  double last = -1.0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const double t = std::stod(lines[i].at(0));
+    EXPECT_GT(t, last) << "history row " << i;
+    last = t;
+  }
+  long vtu = 0;
+  if (fs::exists(f / "fields"))
+    for (const auto& e : fs::directory_iterator(f / "fields")) vtu += e.path().extension() == ".vtu";
+  EXPECT_EQ(vtu, s.at("field_files").get<long>());
+  for (const auto& e : fs::directory_iterator(f)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    EXPECT_NE(name.rfind(".staging", 0), 0u) << name;
+  }
+}
+
+}  // namespace
+
+// `ricochet sweep` killed by SIGKILL in the middle of a run, and resumed at once: the killed
+// sweep's run ends with it (no orphan keeps writing), the resumed sweep reuses the finished run
+// and runs each other run once, in one process per folder, and every run folder ends complete.
+TEST_F(SweepTest, SigkilledSweepLeavesNoOrphanAndResumesWithOneWriterPerRun) {
+  write("slow.toml", slow_case(0.25));
+  const std::string file = write("kill.toml", R"(
+name = "kill"
+base = "slow.toml"
+[[group]]
+name = "g"
+cross = { "output.interval" = [1e-3, 2e-3, 4e-3] }
+)");
+  const std::vector<std::string> ids = {"g/000-output.interval=0.001", "g/001-output.interval=0.002",
+                                        "g/002-output.interval=0.004"};
+  const std::vector<std::string> args = {RICOCHET_BINARY, "sweep", file, "--out", out().string()};
+  using Clock = std::chrono::steady_clock;
+  auto wait_for = [](const std::function<bool()>& done, double seconds) {
+    const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+    while (!done() && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    return done();
+  };
+
+  // Kill the sweep 0.5 s into its second run.
+  const pid_t first = start_process(args, dir_ / "first.log");
+  const fs::path second = out() / "runs" / ids[1];
+  const bool started = wait_for([&] { return fs::exists(second / "stderr.txt"); }, 120.0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const bool unfinished = !fs::exists(second / "summary.json");
+  kill(first, SIGKILL);
+  int status = 0;
+  waitpid(first, &status, 0);
+  const auto killed = Clock::now();
+  ASSERT_TRUE(started) << text_of(dir_ / "first.log");
+  ASSERT_TRUE(unfinished) << "the runs are too short for this machine: make slow_case() longer";
+  ASSERT_TRUE(fs::exists(out() / "runs" / ids[0] / "summary.json"));
+  const long long first_done = mtime_ns(out() / "runs" / ids[0] / "summary.json");
+
+  // Resume at once, watching every process that uses the sweep's folder: each `ricochet run`
+  // must be a child of the resumed sweep, one per run folder.
+  const pid_t resumed = start_process(args, dir_ / "resumed.log");
+  std::map<std::string, std::set<pid_t>> writers;  // run folder -> its run processes
+  std::set<std::string> orphans;
+  int exit_status = -1;
+  for (;;) {
+    const pid_t r = waitpid(resumed, &status, WNOHANG);
+    if (r == resumed) {
+      exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      break;
+    }
+    // A run killed with its sweep takes a moment to end; one still there 0.5 s later is an orphan.
+    const bool settled = Clock::now() - killed > std::chrono::milliseconds(500);
+    for (const Process& p : processes_using(out())) {
+      if (p.pid == resumed || p.argv.size() < 2 || p.argv[1] != "run") continue;
+      if (p.ppid == resumed) writers[p.out()].insert(p.pid);
+      else if (settled) orphans.insert("pid " + std::to_string(p.pid) + " (parent " + std::to_string(p.ppid) + ") -> " + p.out());
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const std::string log = text_of(dir_ / "resumed.log");
+  EXPECT_EQ(exit_status, 0) << log;
+  for (const std::string& o : orphans) ADD_FAILURE() << "a run of the killed sweep still writes: " << o;
+  EXPECT_TRUE(wait_for([&] { return processes_using(out()).empty(); }, 5.0)) << "processes left in the sweep's folder";
+  EXPECT_TRUE(writers[(out() / "runs" / ids[0]).string()].empty()) << "the finished run is reused";
+  for (const auto& [folder, pids] : writers) EXPECT_LE(pids.size(), 1u) << folder;
+  EXPECT_NE(log.find("1 done before, 2 to run"), std::string::npos) << log;
+
+  // Every run folder complete and consistent, summary.csv from the same files.
+  EXPECT_EQ(mtime_ns(out() / "runs" / ids[0] / "summary.json"), first_done);
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 3u);
+  for (const std::string& id : ids) {
+    expect_complete_run_folder(out() / "runs" / id);
+    const Json s = read_json_file(out() / "runs" / id / "summary.json");
+    const double wall = s.at("wall_seconds").get<double>();
+    EXPECT_EQ(t.row(id).at("status"), "ok");
+    EXPECT_DOUBLE_EQ(num(t.row(id), "wall_seconds"), wall);
+    // The time loop's wall time is within the process's, as the resumed sweep measured it.
+    const auto at = log.find("] " + id + " ok wall ");
+    if (id != ids[0] && at != std::string::npos) {
+      const double process_wall = std::stod(log.substr(at + id.size() + 11));
+      EXPECT_LE(wall, process_wall + 0.01) << id;
+    }
+  }
+  const Json sj = read_json_file(out() / "sweep.json");
+  EXPECT_EQ(sj.at("resumed_runs").get<int>(), 1);
+  EXPECT_EQ(sj.at("counts").at("executed").get<int>(), 2);
+}
+
+// A run folder whose lock is held (a process of an interrupted sweep still writing it): the
+// resumed sweep says so and waits for it; if it does not end in time, the sweep stops with an
+// error naming the folder, and starts nothing.
+TEST_F(SweepTest, ResumeWaitsForTheProcessStillWritingARunFolder) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5] }
+)";
+  ASSERT_EQ(run(sweep).executed, 2u);
+  const fs::path f = out() / "runs" / "g" / "001-time.dt=2e-5";
+  ASSERT_TRUE(fs::exists(f / "run.lock"));
+  fs::remove(f / "summary.json");
+  const int fd = ::open((f / "run.lock").c_str(), O_RDWR | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(flock(fd, LOCK_EX | LOCK_NB), 0);
+
+  // Held for longer than the sweep waits: an error, and nothing started.
+  const SweepSpec spec = read_sweep(write("sweep.toml", sweep));
+  SweepOptions o;
+  o.out_dir = out();
+  o.executable = RICOCHET_BINARY;
+  o.log = &log_;
+  o.writer_wait = 0.3;
+  try {
+    run_sweep(spec, expand(spec), o);
+    ADD_FAILURE() << "a sweep started a run in a folder that another process writes";
+  } catch (const std::runtime_error& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(dynamic_cast<const InputError*>(&e), nullptr) << "not bad input: exit 1";
+    EXPECT_NE(msg.find(f.string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find("still"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+  EXPECT_FALSE(fs::exists(f / "summary.json"));
+  EXPECT_TRUE(fs::exists(f / "history.csv")) << "the folder was left alone";
+
+  // Released after a second: the sweep waits, says so, then runs it.
+  std::thread release([fd] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    close(fd);
+  });
+  log_.str("");
+  o.writer_wait = 60.0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const SweepOutcome again = run_sweep(spec, expand(spec), o);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  release.join();
+  EXPECT_EQ(again.executed, 1u);
+  EXPECT_EQ(again.resumed, 1u);
+  EXPECT_GE(waited, 0.9);
+  EXPECT_NE(log_.str().find("waiting"), std::string::npos) << log_.str();
+  expect_complete_run_folder(f);
+}
+
+// A summary.json that a resumed sweep reads is checked: a value of the wrong type in a key the
+// sweep reads makes the run not done, so it is run again, with a note naming the file and key.
+TEST_F(SweepTest, ResumeRerunsARunWhoseSummaryIsInvalid) {
+  const std::string sweep = R"(
+base = "case.toml"
+[[group]]
+name = "g"
+cross = { "time.dt" = [1e-5, 2e-5] }
+)";
+  ASSERT_EQ(run(sweep).executed, 2u);
+  const fs::path s = out() / "runs" / "g" / "000-time.dt=1e-5" / "summary.json";
+  const std::string good = text_of(s);
+  auto edit = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto at = t.find(from);
+    if (at == std::string::npos) throw std::logic_error("test setup: '" + from + "' not in summary.json");
+    return t.replace(at, from.size(), to);
+  };
+  const std::string wall = good.substr(good.find("\"wall_seconds\": "), good.find(',', good.find("\"wall_seconds\": ")) - good.find("\"wall_seconds\": "));
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"wall_seconds", edit(wall, "\"wall_seconds\": \"x\"")},
+      {"cpu_seconds", edit("\"cpu_seconds\": ", "\"cpu_seconds\": null, \"was\": ")},
+      {"status", edit("\"status\": \"ok\"", "\"status\": 5")},
+      {"status", edit("\"status\": \"ok\"", "\"status\": \"fine\"")},
+      {"diverged", edit("\"diverged\": null", "\"diverged\": \"no\"")},
+      {"steps", edit("\"steps\": ", "\"steps\": -3, \"was\": ")},
+      {"not a JSON object", "[1, 2]"},
+  };
+  for (const auto& [key, text] : bad) {
+    SCOPED_TRACE(key + ": " + text.substr(0, 80));
+    std::ofstream(s) << text;
+    log_.str("");
+    const SweepOutcome o = run(sweep);
+    EXPECT_EQ(o.resumed, 1u);
+    EXPECT_EQ(o.executed, 1u);
+    EXPECT_NE(log_.str().find(s.string() + ": " + key), std::string::npos) << log_.str();
+    EXPECT_NE(log_.str().find("run again"), std::string::npos) << log_.str();
+    const Json now = read_json_file(s);
+    EXPECT_TRUE(now.at("wall_seconds").is_number());
+    EXPECT_EQ(now.at("status").get<std::string>(), "ok");
+  }
 }

@@ -11,6 +11,7 @@
 #include "harness/cli/commands.hpp"
 #include "harness/gates/gates.hpp"
 #include "harness/input/input_error.hpp"
+#include "harness/outputs/run_outputs.hpp"
 #include "harness/stability/stability.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "solver/schemes/threads.hpp"
@@ -69,13 +70,13 @@ class CommandLine {
     sets(run_, run_cmd_.sets, "override a case key, e.g. --set time.dt=1e-6 --set mesh=M2 (repeatable)");
     run_threads_ = threads(run_, run_threads_text_, "threads of the run, 0 ... " + std::to_string(kMaxThreads) +
                                      "; 0 = all cores (default: the case key `threads`, else 0); results do not depend on it");
-    run_->add_option("--out", run_cmd_.out_dir, "output folder (default: results/<case name>)")->type_name("DIR");
+    run_out_ = run_->add_option("--out", run_cmd_.out_dir, "output folder (default: results/<case name>)")->type_name("DIR");
     run_->add_flag("-q,--quiet", run_cmd_.quiet, "no progress and no summary line");
 
     sweep_ = command("sweep", "run every case of a sweep file (docs/sweeps.md); writes DIR/summary.csv, DIR/sweep.json, DIR/runs/",
                      "exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 2 bad input, 1 other error");
     sweep_->add_option("SWEEP.toml", sweep_cmd_.file, "the sweep file");
-    sweep_->add_option("--out", out_dir_, "output folder (default: results/<sweep name>)")->type_name("DIR");
+    sweep_out_ = sweep_->add_option("--out", out_dir_, "output folder (default: results/<sweep name>)")->type_name("DIR");
     jobs_ = sweep_->add_option("-j,--jobs", jobs_text_,
                                "runs at the same time, 1 ... " + std::to_string(kMaxSweepJobs) +
                                    " (default 1: one at a time, for clean timings)")
@@ -105,9 +106,9 @@ class CommandLine {
     sets(stability_, stability_cmd_.sets, "override a case key (as for `ricochet run`; repeatable)");
     stability_threads_ = threads(stability_, stability_threads_text_, "threads of every trial run, 0 ... " + std::to_string(kMaxThreads) +
                                                  "; 0 = all cores (default: the case key `threads`, else 0)");
-    stability_->add_option("--out", stability_cmd_.out_dir,
-                           "write DIR/stability.json and each trial's DIR/trials/NN/summary.json, history.csv")
-        ->type_name("DIR");
+    stability_out_ = stability_->add_option("--out", stability_cmd_.out_dir,
+                                            "write DIR/stability.json and each trial's DIR/trials/NN/summary.json, history.csv")
+                         ->type_name("DIR");
     tolerance_ = stability_->add_option("--tolerance", tolerance_text_, "stop when hi/lo - 1 <= REL (default 0.01)")->type_name("REL");
     max_runs_ = stability_->add_option("--max-runs", max_runs_text_, "at most N trial runs (default 30)")->type_name("N");
     end_ = stability_->add_option("--end", end_text_, "time.end of every trial [s] (default: the case's)")->type_name("TIME");
@@ -152,6 +153,7 @@ class CommandLine {
     }
     if (const Script* s = script_of(c)) run_script(s->file, c.remaining());
     check_arguments(c, app_.remaining());
+    check_out(c, &c == run_ ? run_out_ : &c == sweep_ ? sweep_out_ : &c == stability_ ? stability_out_ : nullptr);
 
     if (&c == run_) {
       if (run_threads_->count()) run_cmd_.threads = parse_threads("run", run_threads_text_);
@@ -230,6 +232,14 @@ class CommandLine {
                      " file argument(s); usage: " + synopsis(c));
   }
 
+  // A given --out must name a folder: not empty, not an existing file nor inside one.
+  static void check_out(const CLI::App& c, const CLI::Option* out) {
+    if (!out || !out->count()) return;
+    const std::string dir = out->as<std::string>();
+    if (const std::string problem = output_folder_problem(dir); !problem.empty())
+      throw InputError("ricochet " + c.get_name() + ": --out " + (dir.empty() ? "''" : dir) + ": " + problem);
+  }
+
   // A CLI11 parse error as one line naming the command: "--out needs a value" for a missing value.
   std::string message(const CLI::ParseError& e) const {
     const std::vector<CLI::App*> chosen = app_.get_subcommands();
@@ -246,6 +256,7 @@ class CommandLine {
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
   CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr;
+  CLI::Option *run_out_ = nullptr, *sweep_out_ = nullptr, *stability_out_ = nullptr;
   CLI::Option *run_threads_ = nullptr, *sweep_threads_ = nullptr, *stability_threads_ = nullptr;
   CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
   RunCommand run_cmd_;

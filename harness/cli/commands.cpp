@@ -50,8 +50,11 @@ class ProgressLine {
 int run_command(const RunCommand& c) {
   CaseSpec spec = read_case(c.case_file, c.sets);
   if (c.threads) spec.threads = *c.threads;
-  const PreparedCase pc = prepare_case(spec);
   const std::string out_dir = c.out_dir.empty() ? "results/" + spec.name : c.out_dir;
+  // A folder that cannot be one is found before the run, not after it.
+  if (const std::string problem = output_folder_problem(out_dir); !problem.empty())
+    throw InputError("ricochet run: " + std::string(c.out_dir.empty() ? "output folder " : "--out ") + out_dir + ": " + problem);
+  const PreparedCase pc = prepare_case(spec);
 
   ProgressLine progress(!c.quiet);
   const RunResult r = run_case(pc, [&progress](long s, long n, double t) { progress(s, n, t); });

@@ -19,7 +19,9 @@ struct RunCommand {
 
 // Runs the case and writes its outputs (docs/outputs.md), with a progress line on stderr for
 // runs longer than a couple of seconds and a one-line summary on stdout (unless quiet).
-// Returns 0 (ok) or 3 (diverged, outputs written); throws InputError for bad input.
+// Returns 0 (ok) or 3 (diverged, outputs written); throws InputError for bad input (checked
+// before the run, an output folder that is, or is inside, a file included) and std::runtime_error
+// if the outputs cannot be written (then none of them is left: write_run_outputs).
 int run_command(const RunCommand& c);
 
 // `ricochet report` and `ricochet plot`: replaces this process with the report script `script`

@@ -70,18 +70,19 @@ std::string percent_of(double part, double whole) {
 
 std::optional<MatchValue> match_value(const toml::node& n) {
   MatchValue v;
-  if (n.is_string()) {
-    v.text = *n.value<std::string>();
+  if (const auto* t = n.as_string()) {
+    v.text = t->get();
     v.number = parse_csv_number(v.text);
-  } else if (n.is_integer()) {
-    const auto i = *n.value<int64_t>();
-    v.text = std::to_string(i);
-    v.number = static_cast<double>(i);
-  } else if (n.is_floating_point()) {
-    v.number = *n.value<double>();
+  } else if (const auto* i = n.as_integer()) {
+    // Matched as text and, where a double holds it exactly, as a number (a CSV cell of a larger
+    // integer is matched by its text alone).
+    v.text = std::to_string(i->get());
+    v.number = exact_number(n);
+  } else if (const auto* f = n.as_floating_point()) {
+    v.number = f->get();
     v.text = exact(*v.number);
-  } else if (n.is_boolean()) {
-    v.text = *n.value<bool>() ? "true" : "false";
+  } else if (const auto* b = n.as_boolean()) {
+    v.text = b->get() ? "true" : "false";
   } else {
     return std::nullopt;
   }

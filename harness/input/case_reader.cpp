@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "harness/input/case_spec.hpp"
+#include "harness/input/run_plan.hpp"
 #include "harness/input/suggest.hpp"
 #include "harness/input/toml_reader.hpp"
 #include "solver/schemes/threads.hpp"
@@ -198,7 +199,10 @@ std::vector<Vec2, Eigen::aligned_allocator<Vec2>> read_points(const TableReader&
     const toml::array* q = (*a)[i].as_array();
     if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
       t.fail("points", "element " + std::to_string(i) + ": expected a point [x, y] of two numbers");
-    const Vec2 v(*(*q)[0].value<double>(), *(*q)[1].value<double>());
+    const std::optional<double> x = exact_number((*q)[0]), y = exact_number((*q)[1]);
+    if (!x || !y)
+      t.fail("points", "element " + std::to_string(i) + ": an integer beyond +-2^53 = 9007199254740992 (write it with an exponent)");
+    const Vec2 v(*x, *y);
     if (!v.allFinite()) t.fail("points", "element " + std::to_string(i) + ": expected finite numbers");
     if (!pts.empty() && !((v - pts.back()).norm() > 0.0))
       t.fail("points", "elements " + std::to_string(i - 1) + " and " + std::to_string(i) +
@@ -468,6 +472,14 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     c.energy_growth_limit = dv->number("energy_growth", 2.0, Range{1.0, 1e12, true, false});
     c.monitor_every = static_cast<int>(dv->integer("check_every", 50, 1, 1'000'000));
     dv->finish();
+  }
+  // [limits] (docs/reliability.md): the default memory ceiling is this machine's.
+  c.limits.max_memory_gib = default_max_memory_gib();
+  if (const auto lim = root.table("limits")) {
+    c.limits.max_steps = lim->number("max_steps", c.limits.max_steps, Range::closed(1.0, 1e15));
+    c.limits.max_history_rows = lim->number("max_history_rows", c.limits.max_history_rows, Range::closed(1.0, 1e12));
+    c.limits.max_memory_gib = lim->number("max_memory", c.limits.max_memory_gib, Range{0.0, 1e6, true, false});
+    lim->finish();
   }
   root.finish();
   return c;

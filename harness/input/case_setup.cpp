@@ -9,6 +9,7 @@
 
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
+#include "harness/input/run_plan.hpp"
 #include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/time_step.hpp"
 
@@ -40,6 +41,18 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
     mesh.nodes.colwise() += m.rotate_about;
   }
   mesh.nodes.colwise() += m.offset;
+  // Areas, masses and stiffnesses are squares and higher powers of lengths, which a double
+  // must hold: the span of a mesh is kept within [1e-100, 1e100] m.
+  if (mesh.num_nodes() > 0) {
+    const Vec2 span = mesh.nodes.rowwise().maxCoeff() - mesh.nodes.rowwise().minCoeff();
+    const double size = span.maxCoeff();
+    if (!(size >= 1e-100 && size <= 1e100)) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.3g", size);
+      throw InputError(c.file + ": " + m.where + (m.scale != 1.0 ? ".scale" : "") + ": the mesh spans " + buf +
+                       " m; allowed: 1e-100 ... 1e100 m (a double must hold the squares of its lengths)");
+    }
+  }
   return mesh;
 }
 
@@ -154,6 +167,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   p.spec = spec;
   const CaseSpec& c = p.spec;
 
+  check_mesh_plan(c);  // before a mesh is built: the generated meshes' memory
   std::vector<BodyInput> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
@@ -318,6 +332,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     p.probes.push_back(info);
     s.probes.push_back({pr.name, info.node});
   }
+  check_run_plan(p);  // steps, history rows, memory, the automatic step against time.end
   return p;
 }
 

@@ -138,6 +138,15 @@ struct ContactPairSpec {
   std::string where;
 };
 
+// [limits]: ceilings on what a run may plan, checked before it starts (harness/input/run_plan.hpp,
+// docs/reliability.md). They guard against a typo in time.end, time.dt or a mesh size turning
+// into a run of years or an allocation of terabytes; each can be raised.
+struct RunLimits {
+  double max_steps = 1e8;         // ceil(time.end / dt) [steps]
+  double max_history_rows = 1e6;  // rows of history.csv [-]
+  double max_memory_gib = 64.0;   // estimated memory of the run [GiB]; read: default_max_memory_gib()
+};
+
 struct CaseSpec {
   std::string file;  // as given
   std::string name;
@@ -179,6 +188,7 @@ struct CaseSpec {
   int monitor_every = 50;            // [steps]
 
   int threads = 0;  // OpenMP threads of the run: 0 = all cores, else 1 ... kMaxThreads (threads.hpp)
+  RunLimits limits;
 };
 
 // Parses FILE, applies the --set overrides ("key=value", TOML value syntax, or a bare word

@@ -6,6 +6,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace ricochet {
 
@@ -13,18 +14,35 @@ struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A message as one line: a line break or other control character (e.g. from the text of a
+// TOML syntax error that quotes what it saw) is written as an escape, \n, \t or \xNN.
+inline std::string one_line(std::string_view text) {
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c == '\t') out += "\\t";
+    else if (c < 0x20 || c == 0x7f) out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+    else out += ch;
+  }
+  return out;
+}
+
 // The exit statuses of every command, in one place: runs body() and returns its status; an
-// InputError becomes the line "ricochet: MESSAGE" on `err` and status 2 (bad input, nothing
+// InputError becomes the line "ricochet: MESSAGE" (one_line()) on `err` and status 2 (bad input, nothing
 // written), any other exception "ricochet: error: MESSAGE" and status 1.
 template <class Body>
 int command_status(std::ostream& err, Body&& body) {
   try {
     return body();
   } catch (const InputError& e) {
-    err << "ricochet: " << e.what() << '\n';
+    err << "ricochet: " << one_line(e.what()) << '\n';
     return 2;
   } catch (const std::exception& e) {
-    err << "ricochet: error: " << e.what() << '\n';
+    err << "ricochet: error: " << one_line(e.what()) << '\n';
     return 1;
   }
 }

@@ -3,6 +3,8 @@
 #include "harness/input/suggest.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <optional>
 #include <filesystem>
 #include <sstream>
 
@@ -18,16 +20,39 @@ std::string fmt(double x) {
 
 std::string show(const toml::node& n) {
   std::ostringstream s;
-  if (n.is_string())
-    s << '"' << *n.value<std::string>() << '"';
-  else if (n.is_number())
-    s << fmt(*n.value<double>());
+  if (const auto* t = n.as_string())
+    s << '"' << t->get() << '"';
+  else if (const auto* i = n.as_integer())
+    s << i->get();  // exact, also beyond what a double holds
+  else if (const auto* f = n.as_floating_point())
+    s << fmt(f->get());
   else
     s << type_name(n);
   return s.str();
 }
 
+// "a number > 0", "a finite number", ...: what a number key allows.
+std::string a_number(const Range& r) {
+  const std::string d = r.describe();
+  return d == "a finite number" ? d : "a number " + d;
+}
+
+std::string beyond_double(const toml::node& n) {
+  return "got the integer " + show(n) + ", beyond +-2^53 = 9007199254740992 where a double holds every integer; "
+         "write a number that large with an exponent (e.g. 9.2e18)";
+}
+
 }  // namespace
+
+std::optional<double> exact_number(const toml::node& n) {
+  if (const auto* i = n.as_integer()) {
+    const std::int64_t x = i->get();
+    if (x > kMaxExactInteger || x < -kMaxExactInteger) return std::nullopt;
+    return static_cast<double>(x);
+  }
+  if (const auto* f = n.as_floating_point()) return f->get();
+  return std::nullopt;
+}
 
 toml::table parse_toml(std::string_view text, const std::string& file) {
   try {
@@ -114,18 +139,22 @@ const toml::node& TableReader::require(std::string_view key) const {
     // A key of the table close to the missing one is likely it, misspelt.
     std::vector<std::string> present;
     for (auto&& [k, v] : *table_) present.emplace_back(k.str());
+    // Reported at the typo itself: the key that is there is the one to fix.
     const std::string typo = closest_name(key, present);
-    fail(key, "missing required key" + (typo.empty() ? std::string() : " (the table has \"" + typo + "\": a typo?)"));
+    if (!typo.empty())
+      fail(typo, "unknown key (did you mean \"" + std::string(key) + "\"? it is required here and missing)");
+    fail(key, "missing required key");
   }
   return *n;
 }
 
 double TableReader::number(std::string_view key, Range r) const {
   const toml::node& n = require(key);
-  if (!n.is_number()) fail(key, "expected a number " + r.describe() + "; got " + type_name(n));
-  const double x = *n.value<double>();
-  if (!r.contains(x)) fail(key, "expected a number " + r.describe() + "; got " + show(n));
-  return x;
+  if (!n.is_number()) fail(key, "expected " + a_number(r) + "; got " + type_name(n));
+  const std::optional<double> x = exact_number(n);
+  if (!x) fail(key, "expected " + a_number(r) + "; " + beyond_double(n));
+  if (!r.contains(*x)) fail(key, "expected " + a_number(r) + "; got " + show(n));
+  return *x;
 }
 
 double TableReader::number(std::string_view key, double fallback, Range r) const {
@@ -138,10 +167,11 @@ long TableReader::integer(std::string_view key, long fallback, long lo, long hi)
   const toml::node* n = find(key);
   if (!n) return fallback;
   const std::string allowed = "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-  if (!n->is_integer()) fail(key, "expected " + allowed + "; got " + show(*n));
-  const long x = static_cast<long>(*n->value<int64_t>());
+  const auto* i = n->as_integer();
+  if (!i) fail(key, "expected " + allowed + "; got " + show(*n));
+  const std::int64_t x = i->get();
   if (x < lo || x > hi) fail(key, "expected " + allowed + "; got " + std::to_string(x));
-  return x;
+  return static_cast<long>(x);
 }
 
 std::vector<std::string> TableReader::texts(std::string_view key) const {
@@ -150,12 +180,13 @@ std::vector<std::string> TableReader::texts(std::string_view key) const {
   if (!n) return {};
   const std::string allowed = "a string or an array of non-empty strings";
   std::vector<std::string> out;
-  if (n->is_string()) {
-    out.push_back(*n->value<std::string>());
+  if (const auto* t = n->as_string()) {
+    out.push_back(t->get());
   } else if (const toml::array* a = n->as_array()) {
     for (const toml::node& e : *a) {
-      if (!e.is_string()) fail(key, "expected " + allowed + "; got an element that is " + type_name(e));
-      out.push_back(*e.value<std::string>());
+      const auto* t = e.as_string();
+      if (!t) fail(key, "expected " + allowed + "; got an element that is " + type_name(e));
+      out.push_back(t->get());
     }
   } else {
     fail(key, "expected " + allowed + "; got " + show(*n));
@@ -169,14 +200,16 @@ bool TableReader::boolean(std::string_view key, bool fallback) const {
   read_.insert(std::string(key));
   const toml::node* n = find(key);
   if (!n) return fallback;
-  if (!n->is_boolean()) fail(key, "expected true or false; got " + show(*n));
-  return *n->value<bool>();
+  const auto* b = n->as_boolean();
+  if (!b) fail(key, "expected true or false; got " + show(*n));
+  return b->get();
 }
 
 std::string TableReader::text(std::string_view key) const {
   const toml::node& n = require(key);
-  if (!n.is_string()) fail(key, "expected a string; got " + show(n));
-  return *n.value<std::string>();
+  const auto* t = n.as_string();
+  if (!t) fail(key, "expected a string; got " + show(n));
+  return t->get();
 }
 
 std::string TableReader::text(std::string_view key, std::string fallback) const {
@@ -199,9 +232,7 @@ Vec2 TableReader::vec2(std::string_view key) const {
   const toml::array* a = n.as_array();
   if (!a || a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number())
     fail(key, "expected an array of two numbers [x, y]; got " + show(n));
-  const Vec2 v(*(*a)[0].value<double>(), *(*a)[1].value<double>());
-  if (!v.allFinite()) fail(key, "expected finite numbers");
-  return v;
+  return point(key, *a);
 }
 
 Vec2 TableReader::vec2(std::string_view key, Vec2 fallback) const {
@@ -215,13 +246,28 @@ std::vector<double> TableReader::numbers(std::string_view key, Range each) const
   const toml::node* n = find(key);
   if (!n) return out;
   const toml::array* a = n->as_array();
-  if (!a) fail(key, "expected an array of numbers " + each.describe() + "; got " + show(*n));
+  const std::string allowed = "expected an array of numbers" + (each.describe() == "a finite number" ? std::string(" (finite)") : " " + each.describe());
+  if (!a) fail(key, allowed + "; got " + show(*n));
   for (const auto& e : *a) {
-    if (!e.is_number() || !each.contains(*e.value<double>()))
-      fail(key, "expected an array of numbers " + each.describe() + "; got an element " + show(e));
-    out.push_back(*e.value<double>());
+    const std::optional<double> x = exact_number(e);
+    if (e.is_integer() && !x) fail(key, allowed + "; element " + std::to_string(out.size()) + ": " + beyond_double(e));
+    if (!x || !each.contains(*x)) fail(key, allowed + "; got an element " + show(e));
+    out.push_back(*x);
   }
   return out;
+}
+
+Vec2 TableReader::point(std::string_view key, const toml::array& a) const {
+  Vec2 v;
+  for (int d = 0; d < 2; ++d) {
+    const toml::node& e = a[static_cast<std::size_t>(d)];
+    if (!e.is_number()) fail(key, "expected an array of two numbers [x, y]; got an element that is " + type_name(e));
+    const std::optional<double> x = exact_number(e);
+    if (!x) fail(key, "expected an array of two numbers [x, y]; " + beyond_double(e));
+    v[d] = *x;
+  }
+  if (!v.allFinite()) fail(key, "expected finite numbers");
+  return v;
 }
 
 std::optional<TableReader> TableReader::table(std::string_view key) const {

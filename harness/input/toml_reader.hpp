@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <set>
@@ -38,6 +39,14 @@ toml::table parse_toml_file(const std::string& file, const std::string& what);
 // the kind of a TOML value, for error messages.
 std::string type_name(const toml::node& n);
 
+// The largest integer magnitude below which every integer is a double: 2^53.
+inline constexpr std::int64_t kMaxExactInteger = std::int64_t{1} << 53;
+
+// The double of a number node (an integer or a float), or empty for an integer beyond
+// +-kMaxExactInteger (toml++ gives no double for those rather than round them) and for any
+// other kind of node.
+std::optional<double> exact_number(const toml::node& n);
+
 // Shared by all readers of one case file.
 struct CaseContext {
   std::string file;                 // as given on the command line
@@ -61,6 +70,9 @@ class TableReader {
   Vec2 vec2(std::string_view key, Vec2 fallback) const;
   Vec2 vec2(std::string_view key) const;
   std::vector<double> numbers(std::string_view key, Range each) const;  // empty if absent
+  // A point [x, y] of two finite numbers given as the array `a` found under `key` (e.g. an
+  // element of a list of points); errors name `key`.
+  Vec2 point(std::string_view key, const toml::array& a) const;
   // A string or an array of non-empty strings; empty if absent.
   std::vector<std::string> texts(std::string_view key) const;
   std::optional<TableReader> table(std::string_view key) const;

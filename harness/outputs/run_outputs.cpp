@@ -1,9 +1,12 @@
 #include "harness/outputs/run_outputs.hpp"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <stdexcept>
+#include <system_error>
 
 #include "harness/outputs/atomic_file.hpp"
 #include "harness/outputs/csv_writer.hpp"
@@ -289,24 +292,82 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   return j;
 }
 
-void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r) {
-  std::filesystem::create_directories(dir);
-  // Stale results of an earlier run in the same folder must not describe this one.
-  std::filesystem::remove(dir / "summary.json");
-  std::filesystem::remove_all(dir / "fields");
-  write_file_atomic(dir / "history.csv", format_csv(r.history.columns, r.history.values));
-  if (!r.fields.empty()) {
-    std::vector<std::pair<double, std::string>> series;
-    for (const auto& f : r.fields) {
-      char name[64];
-      std::snprintf(name, sizeof name, "_%08ld.vtu", f.step);
-      const std::string file = pc.spec.name + name;
-      write_file_atomic(dir / "fields" / file, format_vtu_snapshot(pc, f));
-      series.emplace_back(f.time, file);
-    }
-    write_file_atomic(dir / "fields" / "fields.pvd", format_pvd(series));
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void cannot_write(const fs::path& path, const std::string& detail) {
+  throw std::runtime_error("cannot write '" + path.string() + "': " + detail);
+}
+
+// `text` with every `from` replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  for (auto at = text.find(from); !from.empty() && at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+}  // namespace
+
+std::string output_folder_problem(const std::filesystem::path& dir) {
+  if (dir.empty()) return "empty; give a folder name";
+  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(p, ec);
+    if (!ec && fs::exists(st) && !fs::is_directory(st))
+      return p == dir ? "is a file, not a folder" : "'" + p.string() + "' is a file, not a folder";
+    if (p == p.parent_path()) break;
   }
-  write_file_atomic(dir / "summary.json", dump_json(run_summary(pc, r)));
+  return {};
+}
+
+void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) cannot_write(dir, "cannot create the folder: " + ec.message());
+  // Stale results of an earlier run in the same folder must not describe this one: summary.json,
+  // which marks a finished run, goes first. Staging folders of killed runs go too.
+  for (const char* name : {"summary.json", "history.csv"})
+    if (fs::remove(dir / name, ec); ec) cannot_write(dir / name, "cannot remove the earlier one: " + ec.message());
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().filename().string().rfind(".staging-", 0) == 0) fs::remove_all(e.path(), ec);
+  if (fs::remove_all(dir / "fields", ec); ec) cannot_write(dir / "fields", "cannot remove the earlier one: " + ec.message());
+
+  // Every file is written into a staging folder first, then moved into place, summary.json last:
+  // a failure anywhere leaves none of this run's outputs in `dir`.
+  const fs::path stage = dir / (".staging-" + std::to_string(getpid()));
+  try {
+    if (!fs::create_directory(stage, ec) && ec) cannot_write(stage, ec.message());
+    write_file_atomic(stage / "history.csv", format_csv(r.history.columns, r.history.values));
+    if (!r.fields.empty()) {
+      std::vector<std::pair<double, std::string>> series;
+      for (const auto& f : r.fields) {
+        char name[64];
+        std::snprintf(name, sizeof name, "_%08ld.vtu", f.step);
+        const std::string file = pc.spec.name + name;
+        write_file_atomic(stage / "fields" / file, format_vtu_snapshot(pc, f));
+        series.emplace_back(f.time, file);
+      }
+      write_file_atomic(stage / "fields" / "fields.pvd", format_pvd(series));
+    }
+    write_file_atomic(stage / "summary.json", dump_json(run_summary(pc, r)));
+  } catch (const std::exception& e) {
+    fs::remove_all(stage, ec);
+    throw std::runtime_error(replaced(e.what(), stage.string(), dir.string()));  // name the files as the reader knows them
+  }
+  std::vector<fs::path> moved;
+  for (const char* name : {"history.csv", "fields", "summary.json"}) {
+    if (!fs::exists(stage / name)) continue;
+    fs::rename(stage / name, dir / name, ec);
+    if (ec) {
+      const std::string detail = ec.message();
+      for (const fs::path& m : moved) fs::remove_all(m, ec);
+      fs::remove_all(stage, ec);
+      cannot_write(dir / name, detail);
+    }
+    moved.push_back(dir / name);
+  }
+  fs::remove(stage, ec);
 }
 
 std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir) {

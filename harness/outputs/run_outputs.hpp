@@ -1,6 +1,7 @@
 // What a run writes (docs/outputs.md): DIR/summary.json, DIR/history.csv and, when field
-// times are asked for, DIR/fields/<case>_<step>.vtu with DIR/fields/fields.pvd. Each file is
-// written atomically; summary.json is written last, so its presence marks a finished run.
+// times are asked for, DIR/fields/<case>_<step>.vtu with DIR/fields/fields.pvd. All or nothing:
+// every file is written into a staging folder DIR/.staging-<pid>/ and then renamed into place,
+// summary.json last, so its presence marks a finished run and a complete set.
 #pragma once
 
 #include <filesystem>
@@ -22,7 +23,17 @@ Json run_summary(const PreparedCase& pc, const RunResult& r);
 // written result records about how it was obtained.
 Json build_info();
 std::string utc_now();
+// Writes the outputs of a run into `dir` (created if missing): first removes the earlier
+// summary.json, history.csv and fields/ (and staging folders left by killed runs), then writes
+// the new ones into DIR/.staging-<pid>/ and renames them into place, summary.json last. On any
+// failure the staging folder and whatever was already moved are removed, so `dir` holds none
+// of the outputs, and std::runtime_error is thrown with one line naming the file as it would be
+// in `dir` and the OS error, e.g. "cannot write 'out/fields/plate_00000050.vtu': File too large".
 void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc, const RunResult& r);
+
+// Why `dir` cannot be an output folder, found without writing anything: it is empty, or it or
+// one of its parents is an existing file ("'a/b' is a file, not a folder"); empty if neither.
+std::string output_folder_problem(const std::filesystem::path& dir);
 std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const std::string& dir);
 
 }  // namespace ricochet

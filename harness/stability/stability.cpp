@@ -1,5 +1,7 @@
 #include "harness/stability/stability.hpp"
 
+#include "harness/input/run_plan.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -137,6 +139,9 @@ StabilityResult find_stable_dt(const PreparedCase& pc, const StabilityOptions& o
   // A step longer than the run is one step of the run: the search stops there.
   res.cap = std::min(opt.cap_factor * res.estimate, res.end_time);
   res.floor = std::min(opt.floor_factor * res.estimate, res.cap);
+  // The trial of the shortest step plans the most steps and rows: the search stays in the
+  // case's limits (harness/input/run_plan.hpp) if it does.
+  check_run_plan(stability_trial_case(pc, res.floor, opt));
 
   auto budget_left = [&] { return static_cast<int>(res.trials.size()) < opt.max_runs; };
   auto trial = [&](double dt) {

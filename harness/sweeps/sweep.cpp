@@ -40,13 +40,22 @@ class Sweep {
     started_at_ = utc_now();
     fs::create_directories(opt_.out_dir);
     lock();
+    // A run of an interrupted sweep that still writes its folder (it holds the folder's
+    // run.lock) must end before the folder is read or written.
+    for (std::size_t i = 0; i < runs_.size(); ++i)
+      if (fs::exists(plan_.folder(i) / "run.lock")) {
+        const RunFolderLock ended(plan_.folder(i), opt_.writer_wait, *log_, "sweep " + spec_.name);
+      }
 
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       RunRecord& rec = recs_[i];
-      if (!opt_.force && plan_.load_finished(i, rec)) {
+      std::string note;
+      if (!opt_.force && plan_.load_finished(i, rec, note)) {
         rec.state = RunRecord::State::done;
         rec.resumed = true;
         ++out_.resumed;
+      } else if (!note.empty()) {
+        *log_ << "sweep " << spec_.name << ": " << note << "; run again" << std::endl;
       }
     }
     out_.total = runs_.size();
@@ -216,8 +225,8 @@ SweepOutcome run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs,
   if (options.threads && (*options.threads < 0 || *options.threads > kMaxThreads))
     throw InputError("ricochet sweep: --threads: expected an integer in [0, " + std::to_string(kMaxThreads) + "]");
   check_runs(spec, runs);
-  if (fs::exists(options.out_dir) && !fs::is_directory(options.out_dir))
-    throw InputError("ricochet sweep: --out " + options.out_dir.string() + ": not a folder");
+  if (const std::string problem = output_folder_problem(options.out_dir); !problem.empty())
+    throw InputError("ricochet sweep: --out " + options.out_dir.string() + ": " + problem);
   Sweep s(spec, runs, options);
   return s.run();
 }

@@ -37,7 +37,10 @@ struct SweepOptions {
   bool force = false;                // rerun finished runs too
   bool quiet = false;                // no progress lines
   std::filesystem::path executable;  // the ricochet program to run; empty = /proc/self/exe
-  std::ostream* log = nullptr;       // progress lines; nullptr = std::cerr
+  std::ostream* log = nullptr;       // progress lines and notes; nullptr = std::cerr
+  // How long to wait for a process that still writes a run folder (it holds its run.lock: a run
+  // of an interrupted sweep) before stopping with an error [s].
+  double writer_wait = 10.0;
 };
 
 struct SweepOutcome {

@@ -2,8 +2,12 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,6 +21,7 @@
 #include <iostream>
 #include <iterator>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -24,8 +29,6 @@
 
 #include "harness/outputs/atomic_file.hpp"
 #include "harness/sweeps/sweep.hpp"
-
-extern char** environ;
 
 namespace ricochet {
 namespace {
@@ -37,20 +40,22 @@ double seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 
 extern "C" void forward_signal(int sig);
 
-// While it lives, SIGINT, SIGTERM and SIGHUP are passed on to the children set() names before
-// this process ends by the same signal, so that no orphaned run keeps writing into the sweep's
-// folder. (A signal the process ignored stays ignored.) The handler finds it through the one
-// static pointer; there is one at a time.
+// While it lives, SIGINT, SIGTERM and SIGHUP are passed on to the process groups of the runs
+// set() names; the sweep then waits up to kGrace for them to end, kills what is left (SIGKILL to
+// the groups) and ends by the same signal, so that no run keeps writing into the sweep's folder
+// after the sweep has ended. (A signal the process ignored stays ignored.) The handler finds it
+// through the one static pointer; there is one at a time.
 class SignalForwarding {
  public:
   SignalForwarding() {
     active_.store(this);
+    struct sigaction now {};
+    now.sa_handler = forward_signal;
+    sigemptyset(&now.sa_mask);
+    for (int sig : kSignals) sigaddset(&now.sa_mask, sig);  // one handler at a time
     for (std::size_t i = 0; i < std::size(kSignals); ++i) {
-      struct sigaction now {};
       sigaction(kSignals[i], nullptr, &old_[i]);
       if (old_[i].sa_handler == SIG_IGN) continue;
-      now.sa_handler = forward_signal;
-      sigemptyset(&now.sa_mask);
       sigaction(kSignals[i], &now, nullptr);
     }
   }
@@ -61,7 +66,7 @@ class SignalForwarding {
   SignalForwarding(const SignalForwarding&) = delete;
   SignalForwarding& operator=(const SignalForwarding&) = delete;
 
-  // The children to pass signals on to.
+  // The runs to pass signals on to: each pid is its process group's id.
   void set(const std::vector<pid_t>& pids) {
     count_ = 0;
     const std::size_t n = std::min<std::size_t>(pids.size(), kMaxSweepJobs);
@@ -71,15 +76,31 @@ class SignalForwarding {
 
   // The signal handler's work: async-signal-safe calls only.
   static void forward(int sig) {
-    if (const SignalForwarding* f = active_.load())
-      for (std::sig_atomic_t i = 0; i < f->count_; ++i)
-        if (f->children_[i] > 0) kill(f->children_[i], sig);
+    if (SignalForwarding* f = active_.load()) {
+      const std::sig_atomic_t n = f->count_;
+      for (std::sig_atomic_t i = 0; i < n; ++i)
+        if (f->children_[i] > 0) kill(-f->children_[i], sig);
+      const struct timespec step = {0, 10 * 1000 * 1000};
+      for (int tick = 0; tick < kGraceTicks; ++tick) {
+        bool alive = false;
+        for (std::sig_atomic_t i = 0; i < n; ++i)
+          if (f->children_[i] > 0) {
+            if (waitpid(f->children_[i], nullptr, WNOHANG) == 0) alive = true;
+            else f->children_[i] = -f->children_[i];  // ended (reaped here or before)
+          }
+        if (!alive) break;
+        nanosleep(&step, nullptr);
+      }
+      for (std::sig_atomic_t i = 0; i < n; ++i)
+        if (f->children_[i] > 0) kill(-f->children_[i], SIGKILL);
+    }
     signal(sig, SIG_DFL);
-    raise(sig);
+    raise(sig);  // delivered when the handler returns (the signal is blocked until then)
   }
 
  private:
   static constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+  static constexpr int kGraceTicks = 500;  // x 10 ms: kGrace = 5 s
   static inline std::atomic<SignalForwarding*> active_{nullptr};
   static_assert(std::atomic<SignalForwarding*>::is_always_lock_free);
   pid_t children_[kMaxSweepJobs] = {};
@@ -99,7 +120,14 @@ Exit decode(int status) {
   return {false, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
 }
 
-pid_t spawn_run(const fs::path& exe, const SweepRun& run, std::optional<int> threads, const fs::path& out) {
+// Starts `ricochet run` for one repeat of a run, in its own process group, with stdin and
+// stdout on /dev/null, stderr into OUT/stderr.txt, and the run folder's lock (`lock_fd`, which
+// the child keeps open through exec: the lock is held as long as the run lives). The child is
+// killed (SIGKILL) when the thread that forks it ends (PR_SET_PDEATHSIG), so a sweep killed by
+// any signal, SIGKILL included, takes its runs with it; SweepExecution::run() forks from its own
+// thread, which outlives every child it starts. Throws std::runtime_error if the child cannot be
+// started (the error comes back through a close-on-exec pipe).
+pid_t spawn_run(const fs::path& exe, const SweepRun& run, std::optional<int> threads, const fs::path& out, int lock_fd) {
   std::vector<std::string> args = {exe.string(), "run", run.base.string()};
   for (const auto& a : run.set_args()) {
     args.push_back("--set");
@@ -110,19 +138,63 @@ pid_t spawn_run(const fs::path& exe, const SweepRun& run, std::optional<int> thr
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-
   const std::string err = (out / "stderr.txt").string();
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0)
-    throw std::runtime_error("cannot start '" + exe.string() + "': " + std::generic_category().message(rc));
-  return pid;
+  const pid_t parent = getpid();
+
+  int report[2];
+  if (pipe2(report, O_CLOEXEC) != 0) throw std::runtime_error("pipe: " + std::generic_category().message(errno));
+  // No signal handler may run in the child before exec (it would act on the sweep's runs).
+  sigset_t all, old;
+  sigfillset(&all);
+  pthread_sigmask(SIG_SETMASK, &all, &old);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    // The child: async-signal-safe calls only, until exec.
+    int failure[2] = {0, 0};  // {what failed: 1 stderr.txt, 2 exec, 3 set-up; errno}
+    setpgid(0, 0);
+    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);  // the sweep already ended
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction a {};
+      sigaction(sig, nullptr, &a);
+      if (a.sa_handler != SIG_IGN) {
+        a.sa_handler = SIG_DFL;
+        sigaction(sig, &a, nullptr);
+      }
+    }
+    const int in = open("/dev/null", O_RDWR);
+    const int e = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (e < 0) failure[0] = 1;
+    else if (in < 0 || dup2(in, 0) < 0 || dup2(in, 1) < 0 || dup2(e, 2) < 0 || fcntl(lock_fd, F_SETFD, 0) != 0)
+      failure[0] = 3;
+    if (failure[0] == 0) {
+      pthread_sigmask(SIG_SETMASK, &old, nullptr);
+      execv(exe.c_str(), argv.data());
+      failure[0] = 2;
+    }
+    failure[1] = errno;
+    if (write(report[1], failure, sizeof failure) < 0) _exit(127);
+    _exit(127);
+  }
+  const int fork_errno = errno;
+  pthread_sigmask(SIG_SETMASK, &old, nullptr);
+  close(report[1]);
+  if (pid < 0) {
+    close(report[0]);
+    throw std::runtime_error("cannot start '" + exe.string() + "': fork: " + std::generic_category().message(fork_errno));
+  }
+  setpgid(pid, pid);  // as the child does, so that a signal forwarded at once finds the group
+  int failure[2] = {0, 0};
+  ssize_t got = 0;
+  do got = read(report[0], failure, sizeof failure);
+  while (got < 0 && errno == EINTR);
+  close(report[0]);
+  if (got <= 0) return pid;  // exec succeeded (the pipe closed on exec)
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string why = std::generic_category().message(failure[1]);
+  if (failure[0] == 1) throw std::runtime_error("cannot write '" + err + "': " + why);
+  throw std::runtime_error("cannot start '" + exe.string() + "': " + why);
 }
 
 // Waits for one of the children; returns its index in `pids` and its wait status.
@@ -157,13 +229,17 @@ std::optional<Json> outcome(const Exit& e, const fs::path& dir, RunRecord& rec) 
     return std::nullopt;
   }
   if (e.code == 0 || e.code == 3) {
+    std::string problem;
     try {
-      return read_json_file(dir / "summary.json");
+      Json s = read_json_file(dir / "summary.json");
+      problem = summary_problem(s);
+      if (problem.empty()) return s;
     } catch (const JsonParseError& err) {
-      rec.status = "failed";
-      rec.reason = "exit " + std::to_string(e.code) + " without a readable summary.json: " + err.what();
-      return std::nullopt;
+      problem = err.what();
     }
+    rec.status = "failed";
+    rec.reason = "exit " + std::to_string(e.code) + " without a valid summary.json: " + problem;
+    return std::nullopt;
   }
   rec.status = "failed";
   rec.reason = "exit " + std::to_string(e.code) + (line.empty() ? std::string() : ": " + line);
@@ -177,6 +253,26 @@ void link_or_copy(const fs::path& from, const fs::path& to) {
   if (ec) fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
 }
 
+// The pid of the process that holds an flock on the file open as `fd`, from /proc/locks; empty
+// if not found.
+std::string lock_holder(int fd) {
+  struct stat st {};
+  if (fstat(fd, &st) != 0) return {};
+  char id[64];
+  std::snprintf(id, sizeof id, "%02x:%02x:%llu", major(st.st_dev), minor(st.st_dev),
+                static_cast<unsigned long long>(st.st_ino));
+  std::ifstream locks("/proc/locks");
+  for (std::string line; std::getline(locks, line);) {
+    std::istringstream in(line);
+    std::vector<std::string> f;
+    for (std::string w; in >> w;) f.push_back(w);
+    // "1: FLOCK  ADVISORY  WRITE 1234 08:01:5678 0 EOF" (a waiter's line has "->" after "1:")
+    if (f.size() < 6 || f[1] != "FLOCK") continue;
+    if (f[5] == id) return f[4];
+  }
+  return {};
+}
+
 std::string duration_text(double s) {
   char buf[32];
   std::snprintf(buf, sizeof buf, s < 10.0 ? "%.1f s" : "%.0f s", s);
@@ -185,8 +281,68 @@ std::string duration_text(double s) {
 
 }  // namespace
 
+RunFolderLock::RunFolderLock(const fs::path& folder, double wait, std::ostream& log, const std::string& who)
+    : folder_(folder) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  const fs::path p = folder / "run.lock";
+  fd_ = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error("cannot write '" + p.string() + "': " + std::generic_category().message(errno));
+  if (flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  auto holder = [&] {
+    std::string pid = lock_holder(fd_);
+    if (pid.empty()) {  // not in /proc/locks (another pid namespace): the last run started in it
+      pid = read_text(p);
+      while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
+    }
+    return pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos ? std::string("another process")
+                                                                                   : "process " + pid;
+  };
+  log << who << ": " << folder.string() << ": still being written by " << holder()
+      << " (it holds run.lock); waiting up to " << duration_text(wait) << " for it to end" << std::endl;
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait));
+  while (Clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  }
+  const std::string who_holds = holder();
+  ::close(fd_);
+  fd_ = -1;
+  throw std::runtime_error(folder.string() + ": still being written by " + who_holds + " after " + duration_text(wait) +
+                           " (it holds run.lock: a run of an earlier sweep that did not end); stop it, then resume the sweep");
+}
+
+RunFolderLock::RunFolderLock(RunFolderLock&& o) noexcept : folder_(std::move(o.folder_)), fd_(o.fd_) { o.fd_ = -1; }
+
+RunFolderLock& RunFolderLock::operator=(RunFolderLock&& o) noexcept {
+  if (this != &o) {
+    if (fd_ >= 0) ::close(fd_);
+    folder_ = std::move(o.folder_);
+    fd_ = o.fd_;
+    o.fd_ = -1;
+  }
+  return *this;
+}
+
+RunFolderLock::~RunFolderLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void RunFolderLock::record(long pid) {
+  const std::string text = std::to_string(pid) + "\n";
+  if (ftruncate(fd_, 0) != 0 || pwrite(fd_, text.data(), text.size(), 0) != static_cast<ssize_t>(text.size())) {
+    // Only the messages of a later sweep that finds the folder locked use it.
+  }
+}
+
+void RunFolderLock::clear_folder() const {
+  for (const auto& e : fs::directory_iterator(folder_))
+    if (e.path().filename() != "run.lock") fs::remove_all(e.path());
+}
+
 struct SweepExecution::Task {
   std::size_t run;
+  std::optional<RunFolderLock> lock;  // held from the run's start until it is done
   int k = 1;  // current repeat, from 1
   pid_t pid = -1;
   Clock::time_point started;
@@ -208,17 +364,17 @@ void SweepExecution::start(Task& t) {
   const fs::path dir = plan_.repeat_dir(t.run, t.k);
   fs::create_directories(dir);
   t.started = Clock::now();
-  t.pid = spawn_run(program_, plan_.run(t.run), plan_.threads(t.run), dir);
+  t.pid = spawn_run(program_, plan_.run(t.run), plan_.threads(t.run), dir, t.lock->fd());
+  t.lock->record(t.pid);
 }
 
 void SweepExecution::begin(std::size_t i, std::vector<Task>& active) {
-  const fs::path f = plan_.folder(i);
-  fs::remove_all(f);
-  fs::create_directories(f);
-  write_file_atomic(f / "overrides.json", plan_.request(i));
-  records_[i].state = RunRecord::State::active;
   Task t;
   t.run = i;
+  t.lock.emplace(plan_.folder(i), options_.writer_wait, *log_, "sweep " + plan_.spec().name);
+  t.lock->clear_folder();
+  write_file_atomic(plan_.folder(i) / "overrides.json", plan_.request(i));
+  records_[i].state = RunRecord::State::active;
   start(t);
   active.push_back(std::move(t));
 }
@@ -231,26 +387,38 @@ void SweepExecution::run(std::vector<std::size_t> queue, const std::function<voi
     for (const Task& t : active) p.push_back(t.pid);
     return p;
   };
-  while (!queue.empty() || !active.empty()) {
-    while (static_cast<int>(active.size()) < options_.jobs) {
-      const auto it = std::find_if(queue.begin(), queue.end(), [&](std::size_t i) { return plan_.startable(i, records_); });
-      if (it == queue.end()) break;
-      const std::size_t i = *it;
-      queue.erase(it);
-      begin(i, active);
+  try {
+    while (!queue.empty() || !active.empty()) {
+      while (static_cast<int>(active.size()) < options_.jobs) {
+        const auto it = std::find_if(queue.begin(), queue.end(), [&](std::size_t i) { return plan_.startable(i, records_); });
+        if (it == queue.end()) break;
+        const std::size_t i = *it;
+        queue.erase(it);
+        begin(i, active);
+      }
+      if (active.empty()) break;  // cannot happen: a reference never waits for anything
+      const std::vector<pid_t> children = pids();
+      forwarding.set(children);
+      const auto [a, status] = wait_one(children);
+      Task& t = active[a];
+      t.wall += seconds(Clock::now() - t.started);
+      finish(t, status);
+      if (records_[t.run].state != RunRecord::State::done) continue;  // its next repeat runs
+      on_done(t.run);
+      progress(t);
+      active.erase(active.begin() + static_cast<std::ptrdiff_t>(a));
+      forwarding.set(pids());
     }
-    if (active.empty()) break;  // cannot happen: a reference never waits for anything
-    const std::vector<pid_t> children = pids();
-    forwarding.set(children);
-    const auto [a, status] = wait_one(children);
-    Task& t = active[a];
-    t.wall += seconds(Clock::now() - t.started);
-    finish(t, status);
-    if (records_[t.run].state != RunRecord::State::done) continue;  // its next repeat runs
-    on_done(t.run);
-    progress(t);
-    active.erase(active.begin() + static_cast<std::ptrdiff_t>(a));
-    forwarding.set(pids());
+  } catch (...) {
+    // Nothing of this sweep may go on writing after it stopped with an error.
+    forwarding.set({});
+    for (const Task& t : active)
+      if (t.pid > 0) kill(-t.pid, SIGKILL);
+    for (const Task& t : active)
+      if (t.pid > 0)
+        while (waitpid(t.pid, nullptr, 0) < 0 && errno == EINTR) {
+        }
+    throw;
   }
 }
 

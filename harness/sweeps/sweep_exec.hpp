@@ -1,9 +1,12 @@
 // The execution of a sweep's runs (harness/sweeps/sweep.hpp): each run is the subprocess
 // `ricochet run BASE --set KEY=VALUE... [--threads N] --out FOLDER --quiet` (--threads as
 // SweepPlan::threads() says; stdout to /dev/null, stderr to FOLDER/stderr.txt), `jobs` at a
-// time, each repeated as the plan says; SIGINT, SIGTERM and SIGHUP are passed on to the running
-// children. A finished run's record is filled from its summary.json (or marked failed, with the
-// reason), and a progress line is printed after each run.
+// time, each repeated as the plan says. Each run process is in its own process group and dies
+// with the sweep (SIGKILL when the sweep ends, whatever ends it: PR_SET_PDEATHSIG), and holds
+// its folder's lock, RUN/run.lock, for its whole life (RunFolderLock). SIGINT, SIGTERM and
+// SIGHUP are passed on to the running runs' groups; the sweep waits up to 5 s for them to end
+// before it ends by the same signal. A finished run's record is filled from its summary.json
+// (or marked failed, with the reason), and a progress line is printed after each run.
 #pragma once
 
 #include <chrono>
@@ -11,11 +14,42 @@
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
+#include <string>
 #include <vector>
 
 #include "harness/sweeps/sweep_plan.hpp"
 
 namespace ricochet {
+
+// The lock of a run folder: an flock on FOLDER/run.lock. The sweep takes it before it empties the
+// folder and starts the run, and each of the run's processes inherits it (the same open file),
+// so it is held as long as the sweep or any process of the run lives, and the kernel drops it
+// when they have all ended (no stale lock after a crash or SIGKILL). A sweep never writes into,
+// or starts a run in, a folder whose lock another process holds. The file itself holds the pid of
+// the last run process started in the folder (for the messages), and is never removed.
+class RunFolderLock {
+ public:
+  // Creates FOLDER and FOLDER/run.lock if missing and locks it. If another process holds it,
+  // writes one line "WHO: FOLDER: still being written by process PID ...; waiting up to ..." to
+  // `log`, and waits up to `wait` seconds for it; then throws std::runtime_error, one line
+  // naming the folder and the process.
+  RunFolderLock(const std::filesystem::path& folder, double wait, std::ostream& log, const std::string& who);
+  RunFolderLock(RunFolderLock&& o) noexcept;
+  RunFolderLock& operator=(RunFolderLock&& o) noexcept;
+  RunFolderLock(const RunFolderLock&) = delete;
+  RunFolderLock& operator=(const RunFolderLock&) = delete;
+  ~RunFolderLock();  // releases it (the run's processes may still hold it)
+
+  int fd() const { return fd_; }
+  // Writes `pid` (the run process just started) into run.lock.
+  void record(long pid);
+  // Removes everything in the folder but run.lock.
+  void clear_folder() const;
+
+ private:
+  std::filesystem::path folder_;
+  int fd_ = -1;
+};
 
 class SweepExecution {
  public:
@@ -27,7 +61,10 @@ class SweepExecution {
                  std::filesystem::path program, Clock::time_point start, std::size_t done);
 
   // Runs the runs of `queue`, each as soon as a job is free and its reference is done (in queue
-  // order otherwise). A run's folder is emptied and its overrides.json written when it starts.
+  // order otherwise). A run's folder is locked (RunFolderLock, waiting up to
+  // SweepOptions::writer_wait), emptied and its overrides.json written when it starts. Must be
+  // called from a thread that lives until it returns (the runs die with the thread that started
+  // them); if it throws, the runs it started are killed and reaped first.
   // `on_done(i)` is called once run i is done, its record updated (state done; status, reason,
   // summary and timings, or status failed), before its progress line.
   void run(std::vector<std::size_t> queue, const std::function<void(std::size_t)>& on_done);

@@ -48,6 +48,41 @@ std::string json_text(const Json& summary, std::string_view key) {
   return v->is_number() ? compact_json(*v) : std::string();
 }
 
+namespace {
+
+std::string shown(const Json& v) {
+  const std::string t = compact_json(v);
+  return t.size() > 40 ? t.substr(0, 40) + "..." : t;
+}
+
+}  // namespace
+
+std::string summary_problem(const Json& s) {
+  if (!s.is_object()) return "not a JSON object";
+  const auto at = [&](const char* key) { return s.contains(key) ? s.at(key) : Json(); };
+  const Json status = at("status");
+  if (!status.is_string() || (status != "ok" && status != "diverged"))
+    return "status: expected \"ok\" or \"diverged\", got " + (s.contains("status") ? shown(status) : "nothing");
+  const Json d = at("diverged");
+  if (status == "diverged" && !(d.is_object() && d.contains("reason") && d.at("reason").is_string()))
+    return "diverged: expected an object with a string \"reason\" (status \"diverged\"), got " + shown(d);
+  if (status == "ok" && !d.is_null()) return "diverged: expected null (status \"ok\"), got " + shown(d);
+  for (const char* key : {"wall_seconds", "cpu_seconds"}) {
+    const Json v = at(key);
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0.0)
+      return std::string(key) + ": expected a number >= 0, got " + shown(v);
+  }
+  for (const char* key : {"steps", "elements"}) {
+    const Json v = at(key);
+    if (!v.is_number_integer() || v.get<long long>() < 0)
+      return std::string(key) + ": expected an integer >= 0, got " + shown(v);
+  }
+  const Json dt = at("dt");
+  if (!dt.is_number() || !std::isfinite(dt.get<double>()) || dt.get<double>() <= 0.0)
+    return "dt: expected a number > 0, got " + shown(dt);
+  return {};
+}
+
 void set_finished(RunRecord& record, Json summary) {
   record.status = json_text(summary, "status");
   if (record.status != "ok" && record.status != "diverged") record.status = "diverged";
@@ -107,23 +142,36 @@ bool SweepPlan::startable(std::size_t i, const std::vector<RunRecord>& records) 
   return runs_[i].is_reference || ref.empty() || records[index_.at(ref)].state == RunRecord::State::done;
 }
 
-bool SweepPlan::load_finished(std::size_t i, RunRecord& record) const {
+bool SweepPlan::load_finished(std::size_t i, RunRecord& record, std::string& note) const {
+  note.clear();
   const fs::path f = folder(i);
   if (read_text(f / "overrides.json") != request(i)) return false;
   if (!fs::is_regular_file(f / "summary.json")) return false;
-  try {
-    std::vector<double> wall, cpu;
-    for (int k = 1; k <= repeats(i); ++k) {
-      const Json s = read_json_file(repeat_dir(i, k) / "summary.json");
-      wall.push_back(json_number(s, "wall_seconds", std::nan("")));
-      cpu.push_back(json_number(s, "cpu_seconds", std::nan("")));
+  std::vector<double> wall, cpu;
+  std::vector<fs::path> files;
+  for (int k = 1; k <= repeats(i); ++k) files.push_back(repeat_dir(i, k) / "summary.json");
+  if (repeats(i) > 1) files.push_back(f / "summary.json");
+  Json last;
+  for (const fs::path& p : files) {
+    try {
+      Json s = read_json_file(p);
+      if (const std::string problem = summary_problem(s); !problem.empty()) {
+        note = p.string() + ": " + problem;
+        return false;
+      }
+      if (p.parent_path() != f || repeats(i) == 1) {
+        wall.push_back(s.at("wall_seconds").get<double>());
+        cpu.push_back(s.at("cpu_seconds").get<double>());
+      }
+      last = std::move(s);
+    } catch (const JsonParseError& e) {
+      note = p.string() + ": " + e.what();
+      return false;
     }
-    set_finished(record, read_json_file(f / "summary.json"));
-    record.wall = std::move(wall);
-    record.cpu = std::move(cpu);
-  } catch (const JsonParseError&) {
-    return false;
   }
+  set_finished(record, std::move(last));
+  record.wall = std::move(wall);
+  record.cpu = std::move(cpu);
   return true;
 }
 

@@ -67,8 +67,11 @@ class SweepPlan {
   bool startable(std::size_t i, const std::vector<RunRecord>& records) const;
 
   // Whether run i was finished by an earlier invocation: its overrides.json matches the request
-  // and every repeat left a readable summary.json; then `record` is filled from them.
-  bool load_finished(std::size_t i, RunRecord& record) const;
+  // and every repeat left a readable, valid summary.json (summary_problem); then `record` is
+  // filled from them. A summary.json that is there but unreadable or invalid makes the run not
+  // finished, and `note` says which file and why ("PATH: wall_seconds: expected ..."); else
+  // `note` is empty.
+  bool load_finished(std::size_t i, RunRecord& record, std::string& note) const;
 
  private:
   const SweepSpec& spec_;
@@ -77,6 +80,14 @@ class SweepPlan {
   std::map<std::string, std::size_t> index_;
   std::map<std::filesystem::path, std::string> base_hash_;  // FNV-1a of each base case's text
 };
+
+// What is wrong with a run's summary.json for a sweep, in one line naming the key ("wall_seconds:
+// expected a number >= 0, got \"x\""); empty if nothing. Checked: the keys the sweep itself
+// reads: `status` ("ok" or "diverged"), `diverged` (an object with a string `reason` when
+// diverged, else null), `wall_seconds` and `cpu_seconds` (finite numbers >= 0), `steps` and
+// `elements` (integers >= 0), `dt` (a finite number > 0). The other keys are copied to
+// summary.csv as they are, and the error columns skip what they cannot read.
+std::string summary_problem(const Json& summary);
 
 // Fills status, reason and summary from a finished run's summary.json (a status other than ok
 // or diverged counts as diverged).

@@ -271,10 +271,10 @@ SweepReference read_reference(const std::string& file, const TableReader& root, 
 
 std::string toml_text(const toml::node& v) {
   switch (v.type()) {
-    case toml::node_type::string: return toml_string(*v.value<std::string>());
-    case toml::node_type::integer: return std::to_string(*v.value<int64_t>());
-    case toml::node_type::floating_point: return float_text(*v.value<double>());
-    case toml::node_type::boolean: return *v.value<bool>() ? "true" : "false";
+    case toml::node_type::string: return toml_string(v.as_string()->get());
+    case toml::node_type::integer: return std::to_string(v.as_integer()->get());
+    case toml::node_type::floating_point: return float_text(v.as_floating_point()->get());
+    case toml::node_type::boolean: return v.as_boolean()->get() ? "true" : "false";
     case toml::node_type::array: {
       std::string s = "[";
       bool first = true;
@@ -303,7 +303,7 @@ std::string toml_text(const toml::node& v) {
 }
 
 std::string display_text(const toml::node& v) {
-  if (v.is_string()) return *v.value<std::string>();
+  if (const auto* t = v.as_string()) return t->get();
   return toml_text(v);
 }
 
@@ -373,7 +373,7 @@ SweepSpec read_sweep(const std::string& file) {
     sg.set = read_values(file, g, gt, "set");
     sg.cross = read_cross(file, g, gt);
     if (const toml::node* n = gt.get("reference"); n && !n->is_table()) {
-      if (!n->is_boolean() || *n->value<bool>())
+      if (const auto* b = n->as_boolean(); !b || b->get())
         g.fail("reference", "expected a table of case keys (the group's own reference runs), or false (not compared "
                             "with the sweep's [reference]); got " + (n->is_boolean() ? std::string("true") : type_name(*n)));
       g.boolean("reference", false);

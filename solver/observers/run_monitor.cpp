@@ -11,21 +11,9 @@ namespace ricochet {
 
 namespace {
 
-// Steps at which the history is sampled: k * interval rounded to the nearest step, and the last.
-std::vector<long> sample_steps(const RunSettings& s, long planned) {
-  std::vector<long> steps;
-  if (s.sample_interval <= 0.0) {
-    for (long n = 0; n <= planned; ++n) steps.push_back(n);
-    return steps;
-  }
-  for (long k = 0;; ++k) {
-    const long n = std::lround(static_cast<double>(k) * s.sample_interval / s.dt);
-    if (n > planned) break;
-    if (steps.empty() || n > steps.back()) steps.push_back(n);
-  }
-  if (steps.back() != planned) steps.push_back(planned);
-  return steps;
-}
+// The largest step count a run may plan: beyond it a step index would not be exact as a
+// double (times t_n = n dt) and the count could overflow the conversion to long.
+constexpr double kMaxPlannedSteps = 9007199254740992.0;  // 2^53
 
 // z angular momentum of all nodes about their common centre of mass at t_n [kg m^2/s]:
 // L = sum m_i (x_i - x_c) x (v_i - v_c), x = X + u, v = v_n. Taken about the current centre of
@@ -170,7 +158,10 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
     throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
   result.dt = settings.dt;
-  planned_ = static_cast<long>(std::ceil(settings.end_time / settings.dt - 1e-9));
+  const double planned = std::ceil(settings.end_time / settings.dt - 1e-9);
+  if (!(planned <= kMaxPlannedSteps))  // the harness checks its own, lower ceiling first
+    throw std::invalid_argument("run: end_time / dt = " + std::to_string(planned) + " steps, more than 2^53");
+  planned_ = static_cast<long>(planned);
   result.planned_steps = planned_;
   result.history.columns =
       history_columns(settings.probes, contact.candidates.empty()
@@ -178,14 +169,21 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
                                            : contact_interface_names(settings.obstacles, settings.body_pairs));
   variable_ = settings.dt_update_interval > 0;
   if (!variable_) {
-    samples_ = sample_steps(settings, planned_);
+    // Samples: step round(k x interval / dt) for k = 0, 1, ... up to the planned step, and the
+    // planned step; every step when the interval is at most one step (then those roundings
+    // cover every step). Made one at a time (next_sample()), not listed: a list would be as
+    // long as the run.
+    every_step_ = !(settings.sample_interval > settings.dt);
+    next_sample_step_ = 0;
     for (double t : settings.field_times) {
-      const long n = std::lround(t / settings.dt);
-      if (n >= 0 && n <= planned_) field_steps_.push_back(n);  // times after the end are skipped
+      const double x = t / settings.dt;  // times after the end are skipped
+      if (x >= 0.0 && std::round(x) <= planned) field_steps_.push_back(std::lround(x));
     }
     std::sort(field_steps_.begin(), field_steps_.end());
     field_steps_.erase(std::unique(field_steps_.begin(), field_steps_.end()), field_steps_.end());
-    result.history.values.reserve(samples_.size() * result.history.columns.size());
+    const double rows = every_step_ ? planned + 1.0
+                                    : std::min(planned + 1.0, std::floor(settings.end_time / settings.sample_interval) + 2.0);
+    result.history.values.reserve(static_cast<std::size_t>(std::min(rows, 1e7)) * result.history.columns.size());
     result.fields.reserve(field_steps_.size());
     if (!field_steps_.empty()) field_cells_.assign(model.num_cells(), 0.0);
   } else {
@@ -219,7 +217,27 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
 
 bool RunMonitor::sample_at(long n) const {
   if (variable_) return n == planned_step_ && planned_sample_;
-  return next_sample_ < samples_.size() && samples_[next_sample_] == n;
+  return next_sample_step_ == n;
+}
+
+void RunMonitor::next_sample() {
+  const long n = next_sample_step_;
+  if (n >= planned_) {
+    next_sample_step_ = -1;  // the planned step was the last
+  } else if (every_step_) {
+    next_sample_step_ = n + 1;
+  } else {
+    // interval > dt: consecutive k are more than a step apart before rounding, so the next k
+    // is the next sample, unless round-off in k x interval / dt (interval within a few ulps of
+    // dt) rounds it onto this one: then the one after (a loop of at most two turns). A sample
+    // beyond the end is the planned step.
+    double x = 0.0;
+    do {
+      ++sample_k_;
+      x = static_cast<double>(sample_k_) * settings_.sample_interval / settings_.dt;
+    } while (std::round(x) <= static_cast<double>(n));
+    next_sample_step_ = std::round(x) > static_cast<double>(planned_) ? planned_ : std::lround(x);
+  }
 }
 
 bool RunMonitor::field_at(long n) const {
@@ -407,7 +425,7 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     result_.energy_error_max = std::max(result_.energy_error_max, error);
     result_.penetration_max = std::max(result_.penetration_max, depth);
     if (variable_) planned_sample_ = false;
-    else ++next_sample_;
+    else next_sample();
   }
   if (field_at(n)) {
     if (sampled_step_ != n) throw std::logic_error("RunMonitor: a field snapshot without its stress pass");

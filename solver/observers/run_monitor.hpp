@@ -81,8 +81,14 @@ class RunMonitor {
   RunResult& result_;
   const ContactSet& contact_;
   long planned_ = 0;
-  std::vector<long> samples_, field_steps_;
-  std::size_t next_sample_ = 0, next_field_ = 0;
+  // Fixed step: the next history sample's step (-1: none left), made by next_sample() from
+  // sample_k_; and the field snapshots' steps (a list: their number is bounded by the case).
+  long next_sample_step_ = 0;
+  long sample_k_ = 0;
+  bool every_step_ = false;
+  void next_sample();
+  std::vector<long> field_steps_;
+  std::size_t next_field_ = 0;
   bool sample_at(long n) const;
   bool field_at(long n) const;
   // Variable step: the schedule by time (plan_step).

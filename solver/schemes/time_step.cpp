@@ -25,9 +25,11 @@ double critical_time_step(const Model& model, const RunSettings& settings, doubl
 
 namespace {
 
-// Steps from t to end at dt, as the fixed-step loop counts them: ceil((end - t) / dt).
+// Steps from t to end at dt, as the fixed-step loop counts them: ceil((end - t) / dt), at
+// most 2^53 (an estimate for progress output; the conversion cannot overflow).
 long steps_to(double t, double end, double dt) {
-  return static_cast<long>(std::ceil((end - t) / dt - 1e-9));
+  const double n = std::ceil((end - t) / dt - 1e-9);
+  return n < 9007199254740992.0 ? static_cast<long>(n) : 9007199254740992L;
 }
 
 // A step of end - t <= this x dt is no step: t has reached end.
