@@ -262,8 +262,8 @@ ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* ra
 
 }  // namespace
 
-CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
-  toml::table doc = parse_toml_file(file, "case file");
+static CaseSpec read_case_document(toml::table doc, const std::string& file,
+                                   const std::vector<std::string>& overrides) {
   CaseContext ctx{file, {}};
   CaseSpec c;
   c.file = file;
@@ -483,6 +483,15 @@ CaseSpec read_case(const std::string& file, const std::vector<std::string>& over
   }
   root.finish();
   return c;
+}
+
+CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides) {
+  return read_case_document(parse_toml_file(file, "case file"), file, overrides);
+}
+
+CaseSpec read_case_text(std::string_view text, const std::string& file,
+                        const std::vector<std::string>& overrides) {
+  return read_case_document(parse_toml(text, file), file, overrides);
 }
 
 const char* scheme_name(Scheme s) {

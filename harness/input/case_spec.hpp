@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -193,6 +194,10 @@ struct CaseSpec {
 // Parses FILE, applies the --set overrides ("key=value", TOML value syntax, or a bare word
 // taken as a string), validates everything and returns the typed case. Throws InputError.
 CaseSpec read_case(const std::string& file, const std::vector<std::string>& overrides);
+// The same for case TEXT (the fuzz target, tests/fuzz/); `file` names it in messages, and mesh
+// files are resolved against its folder as for a real file.
+CaseSpec read_case_text(std::string_view text, const std::string& file,
+                        const std::vector<std::string>& overrides);
 
 // "bodies[0].material.young" or "bodies.0.material.young" -> {"bodies", "0", "material", "young"}.
 std::vector<std::string> split_key(const std::string& key);

@@ -512,10 +512,18 @@ void Reader::add_node_sets(const std::map<long long, int>& index, Mesh& mesh) co
 Mesh read_gmsh(const std::filesystem::path& file) {
   const std::string name = file.string();
   std::error_code ec;
+  // A device or a pipe (a case's `file = "/dev/zero"`) would be read without end: only a
+  // regular file (or a link to one) is a mesh.
+  if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
+    throw InputError(name + ": cannot open: not a regular file");
   std::ifstream in(file, std::ios::binary);
-  if (std::filesystem::is_directory(file, ec) || !in) throw InputError(name + ": cannot open");
+  if (!in) throw InputError(name + ": cannot open");
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(name + ": cannot read");
+  return parse_gmsh(std::move(text), name);
+}
+
+Mesh parse_gmsh(std::string text, const std::string& name) {
   return Reader(Lexer(name, std::move(text))).read();
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 #include "solver/model/mesh.hpp"
 
@@ -20,5 +21,7 @@ namespace ricochet {
 // unreadable or malformed file, a binary file, another version, any other element type,
 // nodes off z = 0, zero-area or non-convex cells, mixed orientation, or no cells at all.
 Mesh read_gmsh(const std::filesystem::path& file);
+// The same for the TEXT of a .msh file; `name` stands for the file in messages.
+Mesh parse_gmsh(std::string text, const std::string& name);
 
 }  // namespace ricochet
