@@ -142,8 +142,11 @@ TEST(GmshReader, RejectsBadFiles) {
   EXPECT_EQ(error_of(missing), missing.string() + ": cannot open");
   EXPECT_EQ(error_of(data("")), data("").string() + ": cannot open: not a regular file");  // a directory
   // A device is never read (it could be endless: /dev/zero, /dev/stdin).
-  for (const char* device : {"/dev/zero", "/dev/null"})
-    if (fs::exists(device)) EXPECT_EQ(error_of(device), std::string(device) + ": cannot open: not a regular file");
+  for (const char* device : {"/dev/zero", "/dev/null"}) {
+    if (fs::exists(device)) {
+      EXPECT_EQ(error_of(device), std::string(device) + ": cannot open: not a regular file");
+    }
+  }
   const fs::path binary = data("gmsh_binary_header.msh");
   EXPECT_EQ(error_of(binary), binary.string() + ":2: binary .msh is not supported; save as ASCII");
   const fs::path truncated = data("gmsh_truncated_v41.msh");
