@@ -170,8 +170,14 @@ reference = {{ "time.dt" = 1e-6 }}
 """
 
 
+# A guard against a hang, not a speed target (those are benchmarks): generous, because the
+# sanitizer build (ci/sanitize) and a loaded 2-core machine run these commands several times
+# slower than a quiet Release build.
+CALL_TIMEOUT = 900
+
+
 def run(cmd, ok=(0,), **kw):
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=CALL_TIMEOUT, **kw)
     if p.returncode not in ok:
         raise AssertionError(f"{' '.join(cmd)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
     return p
@@ -377,7 +383,7 @@ class ReportSmoke(unittest.TestCase):
         run([BINARY, "stability", BASE, *coarse, "--set", "scheme=implicit", "--energy-bound", "1",
              "--end", "1e-3", "--max-runs", "8", "--out", os.path.join(cls.stab, "implicit_M1"),
              "--quiet"], ok=(0, 4, 5))
-        out, err = kk.communicate(timeout=120)
+        out, err = kk.communicate(timeout=CALL_TIMEOUT)
         if kk.returncode not in (0, 4):
             raise AssertionError(f"{' '.join(kk_cmd)}: exit {kk.returncode}\n{out}\n{err}")
         # 1: no accuracy / stability / verification / Kim–Kwak-type sources, default output
@@ -714,7 +720,7 @@ class SweepReport(unittest.TestCase):
         cls.out_floor = os.path.join(cls.floor, "report")   # the default output folder
         run([PY, SCRIPT, cls.floor])
         # (a) the verification sweep, started by setUpModule
-        out, err = BG["ver_proc"].communicate(timeout=300)
+        out, err = BG["ver_proc"].communicate(timeout=CALL_TIMEOUT)
         if BG["ver_proc"].returncode not in (0, 4):
             raise AssertionError(f"{' '.join(BG['ver_cmd'])}: exit "
                                  f"{BG['ver_proc'].returncode}\n{out}\n{err}")
