@@ -1,10 +1,20 @@
 // Counts every heap allocation of the test executable that includes it, in g_allocations:
-// all replaceable global operator new / delete overloads, and the C allocation functions
-// (malloc, calloc, realloc, aligned_alloc, posix_memalign, memalign), because Eigen allocates
-// with std::malloc, not operator new. The C functions are interposed the way glibc documents
-// ("Replacing malloc"), forwarding to its __libc_* entry points, so every block still comes
-// from and returns to the one glibc heap. Include it in exactly one source file of a test
+// the C allocation functions (malloc, calloc, realloc, aligned_alloc, posix_memalign, memalign)
+// as well as operator new, because Eigen allocates with std::malloc, not operator new, and
+// CHOLMOD (a shared library) with malloc. Include it in exactly one source file of a test
 // executable (each tests/test_*.cpp is its own executable).
+//
+// Two ways, chosen at compile time:
+// - Normal builds: all replaceable global operator new / delete overloads are replaced, and the
+//   C functions are interposed the way glibc documents ("Replacing malloc"), forwarding to its
+//   __libc_* entry points, so every block still comes from and returns to the one glibc heap.
+// - AddressSanitizer builds (RICOCHET_SANITIZE, ci/sanitize): nothing is replaced. ASan
+//   intercepts malloc and operator new itself, and blocks from glibc's heap would not be ASan's
+//   (free would report them, or start-up crashes). Instead a hook is installed in ASan's
+//   allocator (__sanitizer_install_malloc_and_free_hooks), which calls it for every block it
+//   hands out, whichever entry point asked: malloc, calloc, realloc, the aligned forms, every
+//   operator new, from this executable or a shared library. Counting stays complete, and a
+//   no-allocation test still fails when something allocates (docs/reliability.md, "Sanitizers").
 #pragma once
 
 #include <atomic>
@@ -12,6 +22,39 @@
 #include <cstddef>
 #include <cstdlib>
 #include <new>
+
+#if defined(__SANITIZE_ADDRESS__)  // g++
+#define RICOCHET_ALLOC_COUNTER_ASAN 1
+#elif defined(__has_feature)  // clang
+#if __has_feature(address_sanitizer)
+#define RICOCHET_ALLOC_COUNTER_ASAN 1
+#endif
+#endif
+
+#ifdef RICOCHET_ALLOC_COUNTER_ASAN
+
+// Declared here because g++ 12 ships no <sanitizer/allocator_interface.h> (clang does; this is
+// the same declaration). The function is exported by libasan; it returns 1 once installed.
+extern "C" int __sanitizer_install_malloc_and_free_hooks(
+    void (*malloc_hook)(const volatile void*, std::size_t),
+    void (*free_hook)(const volatile void*));
+
+namespace {
+
+std::atomic<long> g_allocations{0};
+
+void count_allocation(const volatile void*, std::size_t) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+void ignore_free(const volatile void*) {}
+
+// Installed before main (the tests count only inside main); 1 when ASan took the hooks.
+[[maybe_unused]] const int g_allocation_hooks_installed =
+    __sanitizer_install_malloc_and_free_hooks(count_allocation, ignore_free);
+
+}  // namespace
+
+#else  // not ASan: interpose
 
 extern "C" {
 void* __libc_malloc(std::size_t size);
@@ -104,3 +147,5 @@ void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept 
 void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
   __libc_free(p);
 }
+
+#endif  // RICOCHET_ALLOC_COUNTER_ASAN

@@ -111,12 +111,13 @@ std::string depth_text(double d) {
 
 // Whether a point lies inside a body and how deep: the even-odd rule over the body's boundary
 // edges (which close every outline and hole) and the distance to the nearest edge. The edges are
-// bucketed in a uniform grid over their bounding box, so that a query visits the edges of its
-// own row to its right (the even-odd ray along +x) and the edges in rings of cells around it
-// (the distance), not every edge: checking every slave node of a contact pair costs about
+// bucketed in a uniform grid over their bounding box, so that a query visits the edges of the
+// cells between it and the grid's nearest side (the even-odd ray) and the edges in rings of
+// cells around it (the distance), not every edge: checking every slave node of a contact pair costs about
 // (slave nodes + master edges), not their product (two bars of 20000 x 1 cells in a contact
 // pair took 21.5 s before the first step with the product; docs/reliability.md, Fuzzing).
-// Each edge is tested with the same arithmetic as a loop over all edges would use.
+// Only a point within rounding of the boundary can be judged otherwise than by a ray along +x
+// over all edges, and its depth is then below the check's tolerance.
 class BoundaryGrid {
  public:
   BoundaryGrid(const Model& model, const BodyInfo& body) : model_(model), edges_(body.boundary_edges) {
@@ -167,25 +168,39 @@ class BoundaryGrid {
     seen_.assign(edges_.size(), -1);
   }
 
-  // The distance from x to the boundary if x is inside the body, else a negative number.
-  double depth_inside(const Vec2& x) {
+  // The distance from x to the boundary if x is inside the body, else a negative number. A
+  // distance found to be at most `beat` is returned as soon as it is found (the caller wants
+  // only a deeper node than one it has).
+  double depth_inside(const Vec2& x, double beat) {
     if (edges_.empty() || !(x.x() >= lo_.x() && x.x() <= hi_.x() && x.y() >= lo_.y() && x.y() <= hi_.y()))
       return -1.0;  // outside the bounding box of a closed outline: not inside
     const int cx = col(x.x()), cy = row(x.y());
-    // The even-odd rule: an edge that the ray from x along +x crosses spans x's y, so it has an
-    // entry in x's row; its crossing lies within its x-extent, so not left of x's column (one
-    // column more on the left for a crossing rounded past the extent's end).
+    // The even-odd rule along the axis ray (+x, -x, +y or -y) that crosses the fewest cells to
+    // the grid's edge: a long thin body is crossed across, not along. An edge that the ray
+    // crosses spans x's other coordinate, so it has an entry in the ray's row (or column); its
+    // crossing lies within its extent along the ray, so not behind x's cell (one cell more
+    // behind for a crossing rounded past the extent's end).
+    const int axis = std::min(nx_ - cx, cx + 1) <= std::min(ny_ - cy, cy + 1) ? 0 : 1;  // 0: along x
+    const int along = axis == 0 ? cx : cy, count = axis == 0 ? nx_ : ny_;
+    const bool forward = axis == 0 ? nx_ - cx <= cx + 1 : ny_ - cy <= cy + 1;
+    const int other = 1 - axis;
     bool inside = false;
     ++query_;
-    for (int c = std::max(cx - 1, 0); c < nx_; ++c)
-      for (int k = first_[cell(c, cy)]; k < first_[cell(c, cy) + 1]; ++k) {
-        const int i = items_[k];
+    const int from = forward ? std::max(along - 1, 0) : 0;
+    const int to = forward ? count - 1 : std::min(along + 1, count - 1);
+    for (int k = from; k <= to; ++k) {
+      const std::size_t c = axis == 0 ? cell(k, cy) : cell(cx, k);
+      for (int j = first_[c]; j < first_[c + 1]; ++j) {
+        const int i = items_[j];
         if (seen_[i] == query_) continue;
         seen_[i] = query_;
         const Vec2 a = model_.ref.col(edges_[i].a), b = model_.ref.col(edges_[i].b);
-        if ((a.y() > x.y()) != (b.y() > x.y()) && x.x() < a.x() + (x.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
-          inside = !inside;
+        if ((a[other] > x[other]) != (b[other] > x[other])) {
+          const double cross = a[axis] + (x[other] - a[other]) * (b[axis] - a[axis]) / (b[other] - a[other]);
+          if (forward ? x[axis] < cross : x[axis] > cross) inside = !inside;
+        }
       }
+    }
     if (!inside) return -1.0;
     // The nearest edge: rings of cells at Chebyshev distance 0, 1, 2, ... from x's cell. An
     // edge not met up to ring k lies in cells of ring k + 1 or beyond, at least k h from x.
@@ -208,7 +223,7 @@ class BoundaryGrid {
           }
         }
       }
-      if (dist <= ring * h_) break;
+      if (dist <= ring * h_ || dist <= beat) break;
     }
     return dist;
   }
@@ -263,7 +278,7 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
     double depth = tol;
     BoundaryGrid grid(model, master);
     for (int node : slave.boundary_nodes) {
-      const double d = grid.depth_inside(model.ref.col(node));
+      const double d = grid.depth_inside(model.ref.col(node), depth);
       if (d > depth) depth = d, worst = node;
     }
     if (worst >= 0)

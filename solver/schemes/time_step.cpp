@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -64,14 +65,30 @@ namespace {
 
 // The smallest (L_e / c_p)^2 over cells, or a cell with non-positive area (inverted), as
 // (value, global cell); the first such cell in cell order on ties, whatever the order the cells
-// are visited in.
+// are visited in. Also the smallest value of the other cells (runner_up), which tells whether
+// another cell is within rounding of it.
 struct Smallest {
   double value = std::numeric_limits<double>::infinity();  // [s^2]; -1: an inverted cell
   int cell = -1;
+  double runner_up = std::numeric_limits<double>::infinity();
   void take(double v, int c) {
-    if (v < value || (v == value && c < cell)) value = v, cell = c;
+    if (v < value || (v == value && c < cell)) {
+      runner_up = std::min(runner_up, value);
+      value = v, cell = c;
+    } else {
+      runner_up = std::min(runner_up, v);
+    }
+  }
+  void merge(const Smallest& o) {
+    take(o.value, o.cell);
+    runner_up = std::min(runner_up, o.runner_up);
   }
 };
+
+// The squared form and the exact step round differently (a few eps each; more where a cell's
+// area cancels), so cells whose squared forms are within this relative margin of the smallest
+// may hold the smallest exact step.
+constexpr double kTieMargin = 1e-12;
 
 // Squared characteristic lengths L_e^2 [m^2] of a block's cells e0 <= e < e1 with current node positions x
 // (2n, interleaved), the squares of q4_characteristic_length / t3_characteristic_length
@@ -146,36 +163,67 @@ double StepControl::critical(const Eigen::VectorXd& u, int* cell, bool parallel)
       Smallest mine;
       part_of(part, parts, mine);
 #pragma omp critical(ricochet_step_control)
-      best.take(mine.value, mine.cell);
+      best.merge(mine);
     }
   } else {
     for (long i = 0; i < dofs; ++i) x[i] = X[i] + u[i];
     part_of(0, 1, best);
   }
-  if (cell) *cell = best.cell;
-  if (best.cell < 0 || !(best.value > 0.0)) return 0.0;  // an inverted cell (or NaN coordinates)
+  if (best.cell < 0 || !(best.value > 0.0)) {  // an inverted cell (or NaN coordinates)
+    if (cell) *cell = best.cell;
+    return 0.0;
+  }
   // The exact step of that cell.
   auto corner = [&](int node) -> Vec2 { return model_.ref.col(node) + u.segment<2>(2 * node); };
+  auto exact_step = [&](const auto& block, int e, double speed) {
+    const auto& c = block.conn[e];
+    if constexpr (std::tuple_size_v<std::decay_t<decltype(c)>> == 4) {
+      Eigen::Matrix<double, 2, 4> x;
+      for (int i = 0; i < 4; ++i) x.col(i) = corner(c[i]);
+      return q4_characteristic_length(x) / speed;
+    } else {
+      Eigen::Matrix<double, 2, 3> x;
+      for (int i = 0; i < 3; ++i) x.col(i) = corner(c[i]);
+      return t3_characteristic_length(x) / speed;
+    }
+  };
   double dt_e = 0.0;
+  int dt_cell = best.cell;
   auto exact = [&](const auto& blocks, const std::vector<double>& speed) {
     for (std::size_t b = 0; b < blocks.size(); ++b) {
       const int e = best.cell - blocks[b].first_cell;
       if (e < 0 || e >= static_cast<int>(blocks[b].conn.size())) continue;
-      const auto& c = blocks[b].conn[e];
-      if constexpr (std::tuple_size_v<std::decay_t<decltype(c)>> == 4) {
-        Eigen::Matrix<double, 2, 4> x;
-        for (int i = 0; i < 4; ++i) x.col(i) = corner(c[i]);
-        dt_e = q4_characteristic_length(x) / speed[b];
-      } else {
-        Eigen::Matrix<double, 2, 3> x;
-        for (int i = 0; i < 3; ++i) x.col(i) = corner(c[i]);
-        dt_e = t3_characteristic_length(x) / speed[b];
-      }
+      dt_e = exact_step(blocks[b], e, speed[b]);
     }
   };
   exact(model_.q4_hourglass, wave_speed_[0]);
   exact(model_.q4_full, wave_speed_[1]);
   exact(model_.t3, wave_speed_[2]);
+  if (best.runner_up <= best.value * (1.0 + kTieMargin)) {
+    // Other cells within rounding of the smallest (a regular mesh, undeformed or deformed
+    // uniformly): the least exact step among them, the first in cell order on ties, as
+    // model.critical_dt takes min of cell_dt. Else the cell that the squared forms rank first
+    // need not have the least step (by an ulp or two), and the undeformed configuration
+    // would not give model.critical_dt bit for bit. One more pass, on one thread.
+    const double margin = best.value * (1.0 + kTieMargin);
+    auto least = [&](const auto& blocks, const std::vector<double>& speed, const std::vector<double>& inv_c2) {
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const int first = blocks[b].first_cell;
+        Smallest near;
+        for (int e = 0; e < static_cast<int>(blocks[b].conn.size()); ++e) {
+          near = Smallest{};
+          smallest_in(blocks[b], e, e + 1, inv_c2[b], x, near);
+          if (!(near.value <= margin)) continue;
+          const double d = exact_step(blocks[b], e, speed[b]);
+          if (d < dt_e || (d == dt_e && first + e < dt_cell)) dt_e = d, dt_cell = first + e;
+        }
+      }
+    };
+    least(model_.q4_hourglass, wave_speed_[0], inv_c2_[0]);
+    least(model_.q4_full, wave_speed_[1], inv_c2_[1]);
+    least(model_.t3, wave_speed_[2], inv_c2_[2]);
+  }
+  if (cell) *cell = dt_cell;
   if (!(dt_e > 0.0)) return 0.0;
   return combined_critical_dt(dt_e, spring_dt_);
 }
