@@ -184,7 +184,7 @@ class Sweep {
       Json e = Json::object();
       e["id"] = r.id;
       e["group"] = r.group;
-      e["kind"] = r.is_reference ? "reference" : "run";
+      e["kind"] = r.is_reference ? "reference" : r.stability ? "stability" : "run";
       e["base"] = r.base.string();
       e["folder"] = r.folder().string();
       Json o = Json::array();
@@ -193,6 +193,11 @@ class Sweep {
       Json sw = Json::array();
       for (const auto& k : r.swept) sw.push_back(k);
       e["swept"] = sw;
+      if (r.stability) {  // a run's entry stays as it was
+        Json so = Json::array();
+        for (const SweepStabilityOption& o : r.stability_options) so.push_back(o.flag + "=" + o.text);
+        e["stability_options"] = so;
+      }
       e["reference_run"] = r.reference_id.empty() ? Json() : Json(r.reference_id);
       e["reference_kind"] = r.reference_kind.empty() ? Json() : Json(r.reference_kind);
       list.push_back(e);
