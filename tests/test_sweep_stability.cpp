@@ -195,6 +195,8 @@ TEST_F(SweepStabilityTest, RunsSearchesAndTablesThem) {
   EXPECT_EQ(first.executed, 2u);
   EXPECT_EQ(first.ok, 2u) << log_.str();
   EXPECT_EQ(first.failed, 0u) << log_.str();
+  EXPECT_NE(log_.str().find("sweep stab: 2 runs (2 stability searches), 0 done before, 2 to run, 2 in parallel"),
+            std::string::npos) << log_.str();
 
   const Table t = read_table(out() / "summary.csv");
   ASSERT_EQ(t.rows.size(), 2u) << slurp(out() / "summary.csv");
@@ -304,6 +306,17 @@ where = { kind = "stability" }
   EXPECT_EQ(check_command({csv, fail}, o2, e2), 4) << o2.str() << e2.str();
   EXPECT_NE(o2.str().find("FAIL stable above twice the estimate"), std::string::npos) << o2.str();
   EXPECT_NE(o2.str().find(kIds[0]), std::string::npos) << o2.str();
+
+  // A stability.json that is not a finished search's (a hand edit) is not trusted: that search
+  // runs again, with a note naming the file and the key; the other is reused.
+  std::ofstream(out() / "runs" / kIds[0] / "stability.json") << "{\"outcome\": \"maybe\"}";
+  log_.str("");
+  const SweepOutcome redone = run(tighter, 2);
+  EXPECT_EQ(redone.resumed, 1u);
+  EXPECT_EQ(redone.executed, 1u);
+  EXPECT_NE(log_.str().find(kIds[0] + std::string("/stability.json: outcome: expected \"bracketed\"")), std::string::npos)
+      << log_.str();
+  EXPECT_EQ(read_json_file(out() / "runs" / kIds[0] / "stability.json").at("outcome"), "bracketed");
 }
 
 // A stability group next to a run group and a shared [reference]: the runs keep their kind and

@@ -64,10 +64,14 @@ class Sweep {
 
     const std::vector<std::size_t> queue = plan_.queue(recs_);
     if (!opt_.quiet) {
-      std::size_t refs = 0;
-      for (const auto& r : runs_) refs += r.is_reference;
+      std::size_t refs = 0, searches = 0;
+      for (const auto& r : runs_) {
+        refs += r.is_reference;
+        searches += r.stability;
+      }
       *log_ << "sweep " << spec_.name << ": " << runs_.size() << " runs";
       if (refs) *log_ << " (" << refs << " reference)";
+      if (searches) *log_ << " (" << searches << " stability searches)";
       *log_ << ", " << out_.resumed << " done before, " << queue.size() << " to run, "
             << (opt_.jobs == 1 ? std::string("one at a time") : std::to_string(opt_.jobs) + " in parallel");
       if (opt_.repeat > 1) *log_ << ", each " << opt_.repeat << " times (reference runs once)";
