@@ -355,6 +355,31 @@ tolerance = 0.2
             read_json_file(out() / "runs/dt/000/stability.json").at("largest_stable_dt").get<double>());
 }
 
+// `ricochet stability` exits 5 when no trial up to the cap is unstable (the implicit scheme):
+// a finished search, status ok, with no unstable step and no reason.
+TEST_F(SweepStabilityTest, NoUnstableStepUpToTheCapIsAFinishedSearch) {
+  const SweepOutcome o = run(R"(base = "case.toml"
+[[group]]
+name = "dt"
+kind = "stability"
+set = { scheme = "implicit" }
+end = 0.02
+)", 1);
+  EXPECT_EQ(o.ok, 1u) << log_.str();
+  const Table t = read_table(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 1u);
+  const auto& r = t.row("dt/000");
+  EXPECT_EQ(r.at("status"), "ok");
+  EXPECT_EQ(r.at("outcome"), "no_unstable_up_to_cap");
+  EXPECT_EQ(r.at("converged"), "false");
+  EXPECT_EQ(r.at("unstable_dt"), "");
+  EXPECT_EQ(r.at("unstable_reason"), "");
+  // The cap is the trials' time.end: one step of the whole run, and stable.
+  EXPECT_EQ(std::stod(r.at("stable_dt")), 0.02);
+  EXPECT_EQ(r.at("end_time"), "0.02");
+  EXPECT_NEAR(std::stod(r.at("stable_over_estimate")), 0.02 / std::stod(r.at("estimate_dt")), 1e-12);
+}
+
 // A search that cannot run (its mesh file is missing: the case passes validation and the
 // command fails when it builds the mesh) is a failed row with the command's reason.
 TEST_F(SweepStabilityTest, AFailedSearchIsAFailedRow) {
