@@ -64,10 +64,14 @@ class Sweep {
 
     const std::vector<std::size_t> queue = plan_.queue(recs_);
     if (!opt_.quiet) {
-      std::size_t refs = 0;
-      for (const auto& r : runs_) refs += r.is_reference;
+      std::size_t refs = 0, searches = 0;
+      for (const auto& r : runs_) {
+        refs += r.is_reference;
+        searches += r.stability;
+      }
       *log_ << "sweep " << spec_.name << ": " << runs_.size() << " runs";
       if (refs) *log_ << " (" << refs << " reference)";
+      if (searches) *log_ << " (" << searches << " stability searches)";
       *log_ << ", " << out_.resumed << " done before, " << queue.size() << " to run, "
             << (opt_.jobs == 1 ? std::string("one at a time") : std::to_string(opt_.jobs) + " in parallel");
       if (opt_.repeat > 1) *log_ << ", each " << opt_.repeat << " times (reference runs once)";
@@ -184,7 +188,7 @@ class Sweep {
       Json e = Json::object();
       e["id"] = r.id;
       e["group"] = r.group;
-      e["kind"] = r.is_reference ? "reference" : "run";
+      e["kind"] = r.is_reference ? "reference" : r.stability ? "stability" : "run";
       e["base"] = r.base.string();
       e["folder"] = r.folder().string();
       Json o = Json::array();
@@ -193,6 +197,11 @@ class Sweep {
       Json sw = Json::array();
       for (const auto& k : r.swept) sw.push_back(k);
       e["swept"] = sw;
+      if (r.stability) {  // a run's entry stays as it was
+        Json so = Json::array();
+        for (const SweepStabilityOption& o : r.stability_options) so.push_back(o.flag + "=" + o.text);
+        e["stability_options"] = so;
+      }
       e["reference_run"] = r.reference_id.empty() ? Json() : Json(r.reference_id);
       e["reference_kind"] = r.reference_kind.empty() ? Json() : Json(r.reference_kind);
       list.push_back(e);

@@ -120,7 +120,8 @@ Exit decode(int status) {
   return {false, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
 }
 
-// Starts `ricochet run` for one repeat of a run, in its own process group, with stdin and
+// Starts `ricochet run` for one repeat of a run (`ricochet stability ... [search options]` for a
+// stability search), in its own process group, with stdin and
 // stdout on /dev/null, stderr into OUT/stderr.txt, and the run folder's lock (`lock_fd`, which
 // the child keeps open through exec: the lock is held as long as the run lives). The child is
 // killed (SIGKILL) when the thread that forks it ends (PR_SET_PDEATHSIG), so a sweep killed by
@@ -128,13 +129,14 @@ Exit decode(int status) {
 // thread, which outlives every child it starts. Throws std::runtime_error if the child cannot be
 // started (the error comes back through a close-on-exec pipe).
 pid_t spawn_run(const fs::path& exe, const SweepRun& run, std::optional<int> threads, const fs::path& out, int lock_fd) {
-  std::vector<std::string> args = {exe.string(), "run", run.base.string()};
+  std::vector<std::string> args = {exe.string(), run.stability ? "stability" : "run", run.base.string()};
   for (const auto& a : run.set_args()) {
     args.push_back("--set");
     args.push_back(a);
   }
   if (threads) args.insert(args.end(), {"--threads", std::to_string(*threads)});
   args.insert(args.end(), {"--out", out.string(), "--quiet"});
+  for (const SweepStabilityOption& o : run.stability_options) args.insert(args.end(), {o.flag, o.text});
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -220,12 +222,33 @@ std::string first_line(const fs::path& p) {
 }
 
 // The summary of a finished child, or nothing (and the record marked failed, with the reason).
-std::optional<Json> outcome(const Exit& e, const fs::path& dir, RunRecord& rec) {
+// A stability search's "summary" is its stability.json: `ricochet stability` exits 0 (bracket
+// found), 4 (no bracket) or 5 (no unstable dt up to the cap) after a finished search, whose
+// report it writes last.
+std::optional<Json> outcome(const Exit& e, const fs::path& dir, RunRecord& rec, bool stability) {
   const std::string line = first_line(dir / "stderr.txt");
   if (e.signaled) {
     rec.status = "failed";
     rec.reason = "killed by signal " + std::to_string(e.code) + " (" + strsignal(e.code) + ")";
     if (!line.empty()) rec.reason += ": " + line;
+    return std::nullopt;
+  }
+  if (stability && (e.code == 0 || e.code == 4 || e.code == 5)) {
+    std::string problem;
+    try {
+      Json s = read_json_file(dir / "stability.json");
+      problem = stability_problem(s);
+      if (problem.empty()) return s;
+    } catch (const JsonParseError& err) {
+      problem = err.what();
+    }
+    rec.status = "failed";
+    rec.reason = "exit " + std::to_string(e.code) + " without a valid stability.json: " + problem;
+    return std::nullopt;
+  }
+  if (stability) {
+    rec.status = "failed";
+    rec.reason = "exit " + std::to_string(e.code) + (line.empty() ? std::string() : ": " + line);
     return std::nullopt;
   }
   if (e.code == 0 || e.code == 3) {
@@ -426,7 +449,11 @@ void SweepExecution::run(std::vector<std::size_t> queue, const std::function<voi
 void SweepExecution::finish(Task& t, int wait_status) {
   const fs::path dir = plan_.repeat_dir(t.run, t.k);
   RunRecord& rec = records_[t.run];
-  if (const std::optional<Json> s = outcome(decode(wait_status), dir, rec)) {
+  const bool stability = plan_.run(t.run).stability;
+  const std::optional<Json> s = outcome(decode(wait_status), dir, rec, stability);
+  if (s && stability) {
+    set_stability_finished(rec, *s);
+  } else if (s) {
     t.walls.push_back(json_number(*s, "wall_seconds", std::nan("")));
     t.cpus.push_back(json_number(*s, "cpu_seconds", std::nan("")));
     if (t.k < plan_.repeats(t.run)) {

@@ -1,12 +1,14 @@
 // The execution of a sweep's runs (harness/sweeps/sweep.hpp): each run is the subprocess
 // `ricochet run BASE --set KEY=VALUE... [--threads N] --out FOLDER --quiet` (--threads as
-// SweepPlan::threads() says; stdout to /dev/null, stderr to FOLDER/stderr.txt), `jobs` at a
-// time, each repeated as the plan says. Each run process is in its own process group and dies
+// SweepPlan::threads() says; stdout to /dev/null, stderr to FOLDER/stderr.txt), or for a
+// stability group's search `ricochet stability BASE --set ... --out FOLDER --quiet [options]`,
+// `jobs` at a time, each repeated as the plan says. Each run process is in its own process group and dies
 // with the sweep (SIGKILL when the sweep ends, whatever ends it: PR_SET_PDEATHSIG), and holds
 // its folder's lock, RUN/run.lock, for its whole life (RunFolderLock). SIGINT, SIGTERM and
 // SIGHUP are passed on to the running runs' groups; the sweep waits up to 5 s for them to end
 // before it ends by the same signal. A finished run's record is filled from its summary.json
-// (or marked failed, with the reason), and a progress line is printed after each run.
+// (a search's from its stability.json), or marked failed with the reason, and a progress line is
+// printed after each run.
 #pragma once
 
 #include <chrono>

@@ -83,6 +83,37 @@ std::string summary_problem(const Json& s) {
   return {};
 }
 
+std::string stability_problem(const Json& s) {
+  if (!s.is_object()) return "not a JSON object";
+  const auto at = [&](const char* key) { return s.contains(key) ? s.at(key) : Json(); };
+  const Json outcome = at("outcome");
+  if (!outcome.is_string() || (outcome != "bracketed" && outcome != "no_unstable_up_to_cap" &&
+                               outcome != "no_stable_down_to_floor" && outcome != "run_limit"))
+    return "outcome: expected \"bracketed\", \"no_unstable_up_to_cap\", \"no_stable_down_to_floor\" or "
+           "\"run_limit\", got " + (s.contains("outcome") ? shown(outcome) : "nothing");
+  if (!at("converged").is_boolean()) return "converged: expected true or false, got " + shown(at("converged"));
+  const Json e = at("estimate");
+  if (!e.is_number() || !std::isfinite(e.get<double>()) || e.get<double>() <= 0.0)
+    return "estimate: expected a number > 0, got " + shown(e);
+  for (const char* key : {"largest_stable_dt", "smallest_unstable_dt"}) {
+    const Json v = at(key);
+    if (!v.is_null() && (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0.0))
+      return std::string(key) + ": expected null or a number > 0, got " + shown(v);
+  }
+  if (!at("runs").is_number_integer() || at("runs").get<long long>() < 0)
+    return "runs: expected an integer >= 0, got " + shown(at("runs"));
+  if (!at("trials").is_array()) return "trials: expected an array, got " + shown(at("trials"));
+  return {};
+}
+
+void set_stability_finished(RunRecord& record, Json report) {
+  record.status = "ok";
+  record.reason.clear();
+  record.summary = std::move(report);
+  record.wall.clear();
+  record.cpu.clear();
+}
+
 void set_finished(RunRecord& record, Json summary) {
   record.status = json_text(summary, "status");
   if (record.status != "ok" && record.status != "diverged") record.status = "diverged";
@@ -101,7 +132,10 @@ SweepPlan::SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, c
 
 fs::path SweepPlan::folder(std::size_t i) const { return options_.out_dir / runs_[i].folder(); }
 
-int SweepPlan::repeats(std::size_t i) const { return runs_[i].is_reference ? 1 : options_.repeat; }
+int SweepPlan::repeats(std::size_t i) const {
+  // A search's trials are its repeats of a kind; timing it K times would only cost K searches.
+  return runs_[i].is_reference || runs_[i].stability ? 1 : options_.repeat;
+}
 
 fs::path SweepPlan::repeat_dir(std::size_t i, int k) const {
   return repeats(i) == 1 ? folder(i) : folder(i) / ("repeat-" + std::to_string(k));
@@ -118,6 +152,12 @@ std::string SweepPlan::request(std::size_t i) const {
     if (v.key != "threads") o.push_back(v.set_arg());
   j["overrides"] = o;
   j["repeats"] = repeats(i);
+  if (run.stability) {
+    j["kind"] = "stability";
+    Json opt = Json::array();
+    for (const SweepStabilityOption& o : run.stability_options) opt.push_back(o.flag + "=" + o.text);
+    j["stability_options"] = opt;
+  }
   return dump_json(j);
 }
 
@@ -146,6 +186,22 @@ bool SweepPlan::load_finished(std::size_t i, RunRecord& record, std::string& not
   note.clear();
   const fs::path f = folder(i);
   if (read_text(f / "overrides.json") != request(i)) return false;
+  if (runs_[i].stability) {
+    const fs::path p = f / "stability.json";
+    if (!fs::is_regular_file(p)) return false;
+    try {
+      Json s = read_json_file(p);
+      if (const std::string problem = stability_problem(s); !problem.empty()) {
+        note = p.string() + ": " + problem;
+        return false;
+      }
+      set_stability_finished(record, std::move(s));
+      return true;
+    } catch (const JsonParseError& e) {
+      note = p.string() + ": " + e.what();
+      return false;
+    }
+  }
   if (!fs::is_regular_file(f / "summary.json")) return false;
   std::vector<double> wall, cpu;
   std::vector<fs::path> files;

@@ -24,7 +24,8 @@ struct RunRecord {
   enum class State { pending, active, done } state = State::pending;
   bool resumed = false;             // finished by an earlier invocation
   std::string status, reason;       // ok / diverged / failed, and why (empty for ok runs)
-  std::optional<Json> summary;      // the run's summary.json (the last repeat's)
+  std::optional<Json> summary;      // the run's summary.json (the last repeat's); a stability
+                                    // search's stability.json
   std::vector<double> wall, cpu;    // per repeat, from the summaries [s]
 };
 
@@ -43,13 +44,14 @@ class SweepPlan {
 
   // DIR/runs/<id>.
   std::filesystem::path folder(std::size_t i) const;
-  // How often run i runs: --repeat K times; a reference run once (its errors are the point, its
+  // How often run i runs: --repeat K times; a reference run and a stability search once (its errors are the point, its
   // timing is not compared with anything).
   int repeats(std::size_t i) const;
   // The outputs of repeat k (from 1) of run i: its folder, or folder/repeat-k when it repeats.
   std::filesystem::path repeat_dir(std::size_t i, int k) const;
   // The text of the run's overrides.json: its id, base case and the base's hash, its overrides
-  // and its number of repeats. Not its threads: they change the timings only, never the
+  // and its number of repeats; for a stability search also `kind` and its search options (a
+  // run's text has neither, so that the folders of sweeps run before they existed are reused). Not its threads: they change the timings only, never the
   // results, so a sweep resumed with another --jobs or --threads (or `threads` values) reuses
   // its finished runs; each run's summary.json records the threads it used.
   std::string request(std::size_t i) const;
@@ -67,7 +69,8 @@ class SweepPlan {
   bool startable(std::size_t i, const std::vector<RunRecord>& records) const;
 
   // Whether run i was finished by an earlier invocation: its overrides.json matches the request
-  // and every repeat left a readable, valid summary.json (summary_problem); then `record` is
+  // and every repeat left a readable, valid summary.json (summary_problem), or for a stability
+  // search its folder has a readable, valid stability.json (stability_problem); then `record` is
   // filled from them. A summary.json that is there but unreadable or invalid makes the run not
   // finished, and `note` says which file and why ("PATH: wall_seconds: expected ..."); else
   // `note` is empty.
@@ -88,6 +91,18 @@ class SweepPlan {
 // `elements` (integers >= 0), `dt` (a finite number > 0). The other keys are copied to
 // summary.csv as they are, and the error columns skip what they cannot read.
 std::string summary_problem(const Json& summary);
+
+// What is wrong with a stability search's stability.json for a sweep, in one line naming the key;
+// empty if nothing. `ricochet stability` writes it last (atomically, after every trial), so a
+// valid one marks a finished search. Checked: the keys the table reads: `outcome` (one of the
+// outcomes of docs/stability.md), `converged` (a boolean), `estimate` (a finite number > 0),
+// `largest_stable_dt` and `smallest_unstable_dt` (null or a finite number > 0), `runs` (an
+// integer >= 0) and `trials` (an array).
+std::string stability_problem(const Json& report);
+
+// Fills a finished search's record from its stability.json: status ok (the search finished,
+// whatever its outcome), no reason.
+void set_stability_finished(RunRecord& record, Json report);
 
 // Fills status, reason and summary from a finished run's summary.json (a status other than ok
 // or diverged counts as diverged).

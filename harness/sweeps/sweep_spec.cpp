@@ -267,6 +267,24 @@ SweepReference read_reference(const std::string& file, const TableReader& root, 
   return ref;
 }
 
+// The search options of a stability group, as `ricochet stability` takes them (same names, with
+// '_' for '-', and the same ranges, so that a bad value stops the sweep before any run instead
+// of failing each search); the ones given, in the order of the command's help.
+std::vector<SweepStabilityOption> read_stability_options(const TableReader& g) {
+  std::vector<SweepStabilityOption> out;
+  auto number = [&](const char* key, const char* flag, Range r) {
+    if (!g.has(key)) return;
+    out.push_back({key, flag, float_text(g.number(key, r))});  // Range: finite numbers only
+  };
+  number("tolerance", "--tolerance", Range{0.0, 10.0, true, false});
+  if (g.has("max_runs")) out.push_back({"max_runs", "--max-runs", std::to_string(g.integer("max_runs", 30, 1, 10000))});
+  number("end", "--end", Range::positive());
+  number("energy_bound", "--energy-bound", Range::positive());
+  return out;
+}
+
+constexpr const char* kStabilityKeys[] = {"tolerance", "max_runs", "end", "energy_bound"};
+
 }  // namespace
 
 std::string toml_text(const toml::node& v) {
@@ -367,6 +385,17 @@ SweepSpec read_sweep(const std::string& file) {
     if (const auto [it, fresh] = names.emplace(sg.name, g.path()); !fresh)
       g.fail("name", "\"" + sg.name + "\" is already the name of " + it->second);
     sg.description = g.text("description", "");
+    sg.stability = g.choice("kind", "run", {"run", "stability"}) == "stability";
+    if (sg.stability) {
+      if (g.has("reference"))
+        g.fail("reference", "a stability group (kind = \"stability\") has no reference: its searches are compared "
+                            "with the estimate, not with a run; remove `reference`");
+      sg.stability_options = read_stability_options(g);
+    } else {
+      for (const char* key : kStabilityKeys)
+        if (g.has(key))
+          g.fail(key, "a search option, only for a stability group; add kind = \"stability\" or remove it");
+    }
     sg.base = read_base(file, g);
     if (sg.base.empty() && s.base.empty())
       g.fail("base", "missing: the sweep has no top-level `base`, so every group must name its own case file");
@@ -386,6 +415,8 @@ SweepSpec read_sweep(const std::string& file) {
     sg.error_probe = g.text("error_probe", "P");
     if (!is_bare_key(sg.error_probe) || sg.error_probe.find('-') != std::string::npos)
       g.fail("error_probe", "\"" + sg.error_probe + "\": a probe name is letters, digits and '_'");
+    if (g.has("error_probe") && sg.stability)
+      g.fail("error_probe", "not used by a stability group: its searches measure no errors; remove it");
     if (g.has("error_probe") && sg.reference.empty())
       g.fail("error_probe", s.reference.present
                                 ? "only used with the group's own `reference` table; the groups compared with the "
@@ -397,9 +428,9 @@ SweepSpec read_sweep(const std::string& file) {
   root.finish();
   if (s.reference.present &&
       std::none_of(s.groups.begin(), s.groups.end(),
-                   [](const SweepGroup& g) { return g.reference.empty() && !g.reference_opt_out; }))
-    throw InputError(s.reference.where + ": no group is compared with it: every group has its own `reference` or "
-                     "`reference = false`; remove [reference], or a group's `reference`");
+                   [](const SweepGroup& g) { return g.reference.empty() && !g.reference_opt_out && !g.stability; }))
+    throw InputError(s.reference.where + ": no group is compared with it: every group has its own `reference`, "
+                     "`reference = false` or kind = \"stability\"; remove [reference], or a group's `reference`");
   return s;
 }
 
@@ -513,7 +544,10 @@ std::vector<SweepRun> expand(const SweepSpec& spec) {
       r.overrides = base;
       merge(r.overrides, combos[i]);
       for (const SweepValue& v : combos[i]) r.swept.push_back(v.key);
-      if (!g.reference.empty()) {
+      if (g.stability) {
+        r.stability = true;
+        r.stability_options = g.stability_options;
+      } else if (!g.reference.empty()) {
         r.reference_id = ref_of.at(signature(free_part(combos[i])));
         r.reference_kind = "group";
         r.error_probe = g.error_probe;

@@ -26,6 +26,15 @@ struct SweepAxis {
   std::vector<SweepValue> values;  // in the order written; at least one
 };
 
+// The search options of a stability group (`kind = "stability"`): the options of `ricochet
+// stability` (harness/stability/stability.hpp), each as the sweep file gives it, in the order of
+// the command's help; only the ones given are passed on, so the command's defaults apply.
+struct SweepStabilityOption {
+  std::string key;   // sweep-file key: tolerance, max_runs, energy_bound, end
+  std::string flag;  // the command's option: --tolerance, --max-runs, --energy-bound, --end
+  std::string text;  // the value as passed on, e.g. "0.05", "12"
+};
+
 struct SweepGroup {
   std::string name;
   std::string description;
@@ -35,6 +44,10 @@ struct SweepGroup {
   std::vector<SweepValue> reference;  // the group's own reference runs; empty = none
   bool reference_opt_out = false;     // `reference = false`: not compared with the sweep's [reference]
   std::string error_probe = "P";      // probe whose displacement error is measured (own reference)
+  // `kind = "stability"`: each combination is a stability search (`ricochet stability`), not a
+  // run; such a group has no reference and is never compared with the sweep's [reference].
+  bool stability = false;
+  std::vector<SweepStabilityOption> stability_options;  // the search options given, in order
   std::string where;                  // "FILE:LINE: group[N]"
 };
 
@@ -76,6 +89,8 @@ struct SweepRun {
   std::string reference_id;           // id of the run's reference run; empty if none
   std::string reference_kind;         // "shared" (the sweep's [reference]) or "group"; empty if none
   std::string error_probe;            // probe name for the reference errors (groups with a reference)
+  bool stability = false;             // a stability search (`ricochet stability`), not a run
+  std::vector<SweepStabilityOption> stability_options;  // its search options (its group's)
 
   std::vector<std::string> set_args() const;  // "key=value" for read_case / ricochet run --set
   std::filesystem::path folder() const;       // "runs/<id>", relative to the sweep's output folder

@@ -39,6 +39,40 @@ void flatten_into(const Json& v, const std::string& name, std::vector<FlatField>
   }
 }
 
+// The keys of a stability.json that a run's summary.json also has, with the same meaning: a
+// search's row shares their columns with the runs (a gate's `where = { scheme = ... }` selects
+// both); the rest of the report is in the search's own columns (stability_columns).
+constexpr const char* kSharedStabilityKeys[] = {"ricochet_version", "case", "case_file", "overrides", "scheme",
+                                                "mesh", "element", "nodes", "elements", "critical_dt",
+                                                "penalty_critical_dt", "end_time"};
+
+// The columns of a finished search, from its stability.json (stability_problem checked it).
+std::vector<std::pair<std::string, std::string>> stability_columns(const Json& s) {
+  // A missing bound is null, as stability_problem reads it.
+  auto at = [&](const char* key) { return s.contains(key) ? s.at(key) : Json(); };
+  auto text = [&](const char* key) { return at(key).is_null() ? std::string() : compact_json(at(key)); };
+  std::vector<std::pair<std::string, std::string>> out;
+  out.push_back({"stable_dt", text("largest_stable_dt")});
+  out.push_back({"unstable_dt", text("smallest_unstable_dt")});
+  out.push_back({"estimate_dt", text("estimate")});
+  // lo / estimate, computed here rather than read: the report's key is optional to the table.
+  const Json lo = at("largest_stable_dt");
+  out.push_back({"stable_over_estimate", lo.is_null() ? std::string()
+                                                      : number_text(lo.get<double>() / s.at("estimate").get<double>())});
+  out.push_back({"outcome", s.at("outcome").get<std::string>()});
+  out.push_back({"converged", s.at("converged").get<bool>() ? "true" : "false"});
+  out.push_back({"trials", std::to_string(s.at("trials").size())});
+  // What stopped the search from above: the reason of the smallest unstable trial (the
+  // divergence, or the energy rule), empty when no trial was unstable.
+  std::string reason;
+  if (const Json hi = at("smallest_unstable_dt"); !hi.is_null())
+    for (const Json& t : s.at("trials"))
+      if (t.is_object() && t.contains("dt") && t.at("dt") == hi && t.contains("reason") && t.at("reason").is_string())
+        reason = t.at("reason").get<std::string>();
+  out.push_back({"unstable_reason", reason});
+  return out;
+}
+
 }  // namespace
 
 std::vector<FlatField> flatten_summary(const Json& summary) {
@@ -167,6 +201,11 @@ SweepTable::SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& reco
   if (!sr.check.empty())
     for (const auto& m : metric_names(sr.error_probe))
       if (has_floor(m)) tail.push_back("floor_" + m);
+  // Only a sweep with stability groups has their columns: the table of any other sweep stays
+  // as it was.
+  if (std::any_of(runs.begin(), runs.end(), [](const SweepRun& r) { return r.stability; }))
+    tail.insert(tail.end(), {"stable_dt", "unstable_dt", "estimate_dt", "stable_over_estimate", "outcome", "converged",
+                             "trials", "unstable_reason"});
 }
 
 void SweepTable::run_done(std::size_t i) {
@@ -181,10 +220,23 @@ const SummaryRow& SweepTable::row(std::size_t i) {
   SummaryRow r;
   r.run_id = run.id;
   r.group = run.group;
-  r.kind = run.is_reference ? "reference" : "run";
+  r.kind = run.is_reference ? "reference" : run.stability ? "stability" : "run";
   r.status = rec.status;
   r.reason = rec.reason;
   for (const SweepValue& v : run.overrides) r.swept.push_back({v.key, v.display});
+  if (run.stability) {
+    if (rec.summary) {
+      for (const char* key : kSharedStabilityKeys)
+        if (const auto it = rec.summary->find(key); it != rec.summary->end()) {
+          Json one = Json::object();
+          one[key] = *it;
+          for (FlatField& f : flatten_summary(one)) r.summary.push_back(std::move(f));
+        }
+      r.extra = stability_columns(*rec.summary);
+    }
+    rows_[i] = std::move(r);
+    return *rows_[i];
+  }
   if (rec.summary) {
     r.summary = flatten_summary(*rec.summary);
     const std::size_t k = rec.wall.size();

@@ -31,7 +31,7 @@ struct FlatField {
 std::vector<FlatField> flatten_summary(const Json& summary);
 
 struct SummaryRow {
-  std::string run_id, group, kind, status, reason;  // kind: "run" or "reference"
+  std::string run_id, group, kind, status, reason;  // kind: "run", "reference" or "stability"
   std::vector<std::pair<std::string, std::string>> swept;  // case key -> value (display form)
   std::vector<FlatField> summary;                          // flattened summary.json; empty if failed
   std::vector<std::pair<std::string, std::string>> extra;  // tail column -> value
@@ -58,8 +58,9 @@ class SweepTable {
  public:
   // The layout: the swept keys of the runs, then of the reference runs; the tail: repeats,
   // wall_seconds_min, wall_seconds_max, error_probe_<P> for each error probe, error_<metric>,
-  // reference_run, reference_kind, reference_dt, impulse_source and, with a check run,
-  // floor_<metric>.
+  // reference_run, reference_kind, reference_dt, impulse_source, with a check run
+  // floor_<metric>, and with a stability group the search columns (stable_dt, unstable_dt,
+  // estimate_dt, stable_over_estimate, outcome, converged, trials, unstable_reason).
   SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& records);
 
   // Run i is done: its row, and those of the runs compared with it, are built again.
