@@ -306,7 +306,7 @@ void distort_mesh(Mesh& mesh, double distort, std::uint64_t seed) {
     }
     return s;
   };
-  const std::string advice = "; lower distort (got " + str(distort) + ")";
+  const std::string advice = "; lower distort (got " + str(distort) + ") or use another seed";
   for (std::size_t c = 0; c < mesh.quads.size(); ++c) {
     const auto& q = mesh.quads[c];
     if (!(signed_area(mesh, q.data(), 4) > 0.0))

@@ -89,8 +89,11 @@ std::vector<double> local_element_size(const Mesh& mesh);
 //   std::fma(distort * h, r, x) (correctly rounded, no compiler-dependent contraction).
 // distort = 0 returns at once: the mesh is unchanged and no number is drawn. Afterwards every
 // cell must have positive area and every Q4 a positive corner Jacobian (q4_corner_quality > 0,
-// i.e. it is still convex); otherwise InputError "cell C (nodes ...) ...; lower distort".
-// Meant for distort in [0, 0.5) (the case reader's range); distort must be finite and >= 0.
+// i.e. it is still convex); otherwise InputError "after distortion Q4 cell C (nodes ...) ...;
+// lower distort (got d) or use another seed". A square cell cannot fold for distort < 0.25
+// (its corner Jacobian is at least (1 - 2d)^2 - (2d)^2 = 1 - 4d of the undistorted one); above
+// that some seeds fold a cell. The case reader allows [0, 0.5); here distort must be finite
+// and >= 0.
 void distort_mesh(Mesh& mesh, double distort, std::uint64_t seed);
 
 }  // namespace ricochet
