@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "harness/input/case_spec.hpp"
 #include "harness/input/run_plan.hpp"
@@ -29,6 +30,10 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
     std::filesystem::path p = t.text("file");
     if (p.is_relative()) p = dir / p;
     m.source = GmshFile{p};
+    for (const char* key : {"distort", "seed"})
+      if (t.has(key))
+        t.fail(key, "applies to generated meshes only (generator = \"rectangle\", \"arc_plate\", \"disk\"), "
+                    "not to a mesh file");
   } else {
     const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk"});
     if (gen == "rectangle") {
@@ -59,6 +64,9 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
       a.height_is_overall = t.choice("height_is", "side", {"side", "overall"}) == "overall";
       m.source = a;
     }
+    // Interior nodes moved at random by up to distort x the local element size (distort_mesh).
+    m.distort = t.number("distort", 0.0, Range{0.0, 0.5, false, true});
+    m.seed = static_cast<std::uint64_t>(t.integer("seed", 1, 0, std::numeric_limits<long>::max()));
   }
   m.scale = t.number("scale", 1.0, Range::positive());
   m.rotate = t.number("rotate", 0.0, Range::closed(-360.0, 360.0));

@@ -32,6 +32,13 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
   } catch (const InputError& e) {
     throw InputError(c.file + ": " + m.where + ": " + e.what());
   }
+  // Distortion (generated meshes) moves interior nodes of the mesh as generated, before the
+  // scale, rotation and offset below, so those transform the distorted mesh rigidly.
+  try {
+    distort_mesh(mesh, m.distort, m.seed);
+  } catch (const InputError& e) {
+    throw InputError(c.file + ": " + m.where + ".distort: " + e.what());
+  }
   // x' = R (s x - c) + c + offset: scaled, rotated counterclockwise about c, translated.
   mesh.nodes *= m.scale;
   if (m.rotate != 0.0) {

@@ -2,6 +2,7 @@
 // defaults and ranges are documented in docs/case-format.md.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -40,6 +41,8 @@ struct GmshFile {
 struct MeshSpec {
   std::string name;
   std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile> source;
+  double distort = 0.0;          // generated meshes: interior nodes moved by up to this x h [-]
+  std::uint64_t seed = 1;        // of the distortion's random numbers (distort_mesh)
   double scale = 1.0;            // coordinates multiplied by this [-]
   double rotate = 0.0;           // then rotated counterclockwise by this [degrees]
   Vec2 rotate_about = Vec2::Zero();  // about this point (of the scaled mesh) [m]

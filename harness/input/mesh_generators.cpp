@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -258,6 +260,68 @@ Mesh make_disk(const DiskSpec& spec) {
     std::sort(set.begin(), set.end());
   }
   return mesh;
+}
+
+std::vector<double> local_element_size(const Mesh& mesh) {
+  std::vector<double> h2(mesh.num_nodes(), std::numeric_limits<double>::infinity());
+  auto edge = [&](int a, int b) {
+    const double dx = mesh.nodes(0, b) - mesh.nodes(0, a), dy = mesh.nodes(1, b) - mesh.nodes(1, a);
+    const double l2 = std::fma(dx, dx, dy * dy);
+    h2[a] = std::min(h2[a], l2);
+    h2[b] = std::min(h2[b], l2);
+  };
+  for (const auto& q : mesh.quads)
+    for (int k = 0; k < 4; ++k) edge(q[k], q[(k + 1) % 4]);
+  for (const auto& t : mesh.tris)
+    for (int k = 0; k < 3; ++k) edge(t[k], t[(k + 1) % 3]);
+  for (double& v : h2) v = std::sqrt(v);  // sqrt(inf) = inf
+  return h2;
+}
+
+void distort_mesh(Mesh& mesh, double distort, std::uint64_t seed) {
+  if (!(std::isfinite(distort) && distort >= 0.0)) fail("distort must be finite and >= 0 (got " + str(distort) + ")");
+  if (distort == 0.0) return;
+  const std::vector<double> h = local_element_size(mesh);
+  std::vector<char> on_boundary(mesh.num_nodes(), 0);
+  for (int n : boundary_nodes(mesh)) on_boundary[n] = 1;
+  std::mt19937_64 random(seed);
+  // A draw as a double r uniform in [-1, 1): the top 53 bits k as u = k 2^-53, then 2u - 1.
+  auto draw = [&random] {
+    const double u = static_cast<double>(random() >> 11) * 0x1p-53;
+    return 2.0 * u - 1.0;
+  };
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    if (on_boundary[i] || !std::isfinite(h[i])) continue;
+    const double amplitude = distort * h[i];
+    const double rx = draw();
+    const double ry = draw();
+    mesh.nodes(0, i) = std::fma(amplitude, rx, mesh.nodes(0, i));
+    mesh.nodes(1, i) = std::fma(amplitude, ry, mesh.nodes(1, i));
+  }
+  auto nodes_of = [](const int* c, int count) {
+    std::string s;
+    for (int k = 0; k < count; ++k) {
+      if (k > 0) s += ' ';
+      s += std::to_string(c[k]);
+    }
+    return s;
+  };
+  const std::string advice = "; lower distort (got " + str(distort) + ") or use another seed";
+  for (std::size_t c = 0; c < mesh.quads.size(); ++c) {
+    const auto& q = mesh.quads[c];
+    if (!(signed_area(mesh, q.data(), 4) > 0.0))
+      fail("after distortion Q4 cell " + std::to_string(c) + " (nodes " + nodes_of(q.data(), 4) +
+           ") has no positive area" + advice);
+    if (!(q4_corner_quality(mesh, q) > 0.0))
+      fail("after distortion Q4 cell " + std::to_string(c) + " (nodes " + nodes_of(q.data(), 4) +
+           ") is not convex (a corner Jacobian is <= 0)" + advice);
+  }
+  for (std::size_t c = 0; c < mesh.tris.size(); ++c) {
+    const auto& t = mesh.tris[c];
+    if (!(signed_area(mesh, t.data(), 3) > 0.0))
+      fail("after distortion T3 cell " + std::to_string(mesh.quads.size() + c) + " (nodes " +
+           nodes_of(t.data(), 3) + ") has no positive area" + advice);
+  }
 }
 
 }  // namespace ricochet

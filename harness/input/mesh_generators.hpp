@@ -4,6 +4,8 @@
 // "rectangle: nx must be >= 1 (got 0)"; the caller prefixes the file and key.
 #pragma once
 
+#include <cstdint>
+
 #include "solver/model/mesh.hpp"
 #include "solver/model/types.hpp"
 
@@ -69,5 +71,29 @@ struct DiskSpec {
   int n = 8;                    // cells along a quarter of the rim, >= 1
 };
 Mesh make_disk(const DiskSpec& spec);
+
+// The local element size h of every node [m]: the smallest length of the cell edges that meet
+// at the node (+infinity for a node that no cell uses). A graded mesh thus has small h where its
+// cells are small. Squared lengths are computed as std::fma(dx, dx, dy * dy) and the root by
+// std::sqrt, both correctly rounded, so h is the same on every IEEE-754 machine.
+std::vector<double> local_element_size(const Mesh& mesh);
+
+// Moves every interior node (not in boundary_nodes(mesh), used by a cell) by a random vector
+// whose components are each uniform in [-distort h, +distort h), h = local_element_size of
+// that node in the undistorted mesh; boundary nodes are not moved, so node sets and boundary
+// shapes stay exact. The random numbers are reproducible on every machine:
+// - generator std::mt19937_64 constructed from `seed` (the standard fixes its sequence);
+// - interior nodes in increasing node index, two draws per node, x first, then y;
+// - a draw k (64 bits) becomes u = (k >> 11) * 2^-53, uniform in [0, 1) and exact, then
+//   r = 2u - 1 in [-1, 1) (exact), and the coordinate x + (distort h) r is computed as
+//   std::fma(distort * h, r, x) (correctly rounded, no compiler-dependent contraction).
+// distort = 0 returns at once: the mesh is unchanged and no number is drawn. Afterwards every
+// cell must have positive area and every Q4 a positive corner Jacobian (q4_corner_quality > 0,
+// i.e. it is still convex); otherwise InputError "after distortion Q4 cell C (nodes ...) ...;
+// lower distort (got d) or use another seed". A square cell cannot fold for distort < 0.25
+// (its corner Jacobian is at least (1 - 2d)^2 - (2d)^2 = 1 - 4d of the undistorted one); above
+// that some seeds fold a cell. The case reader allows [0, 0.5); here distort must be finite
+// and >= 0.
+void distort_mesh(Mesh& mesh, double distort, std::uint64_t seed);
 
 }  // namespace ricochet
