@@ -233,35 +233,21 @@ std::optional<Json> outcome(const Exit& e, const fs::path& dir, RunRecord& rec, 
     if (!line.empty()) rec.reason += ": " + line;
     return std::nullopt;
   }
-  if (stability && (e.code == 0 || e.code == 4 || e.code == 5)) {
+  // A finished child: a run exits 0 (ok) or 3 (diverged), a search 0, 4 or 5; its report must
+  // then be there and valid.
+  const bool finished = stability ? (e.code == 0 || e.code == 4 || e.code == 5) : (e.code == 0 || e.code == 3);
+  if (finished) {
+    const char* report = stability ? "stability.json" : "summary.json";
     std::string problem;
     try {
-      Json s = read_json_file(dir / "stability.json");
-      problem = stability_problem(s);
+      Json s = read_json_file(dir / report);
+      problem = stability ? stability_problem(s) : summary_problem(s);
       if (problem.empty()) return s;
     } catch (const JsonParseError& err) {
       problem = err.what();
     }
     rec.status = "failed";
-    rec.reason = "exit " + std::to_string(e.code) + " without a valid stability.json: " + problem;
-    return std::nullopt;
-  }
-  if (stability) {
-    rec.status = "failed";
-    rec.reason = "exit " + std::to_string(e.code) + (line.empty() ? std::string() : ": " + line);
-    return std::nullopt;
-  }
-  if (e.code == 0 || e.code == 3) {
-    std::string problem;
-    try {
-      Json s = read_json_file(dir / "summary.json");
-      problem = summary_problem(s);
-      if (problem.empty()) return s;
-    } catch (const JsonParseError& err) {
-      problem = err.what();
-    }
-    rec.status = "failed";
-    rec.reason = "exit " + std::to_string(e.code) + " without a valid summary.json: " + problem;
+    rec.reason = "exit " + std::to_string(e.code) + " without a valid " + report + ": " + problem;
     return std::nullopt;
   }
   rec.status = "failed";
