@@ -80,7 +80,8 @@ TEST(ContactObservables, FrictionlessPlateImpulseIsTheMomentumChange) {
 // The per-step count of status changes (history contact_status_changes), in every scheme, on the
 // oblique plate with friction sampled at every step. A change of the closed contacts' number, or
 // of the stick or slip counts, needs at least as many status changes; the plate lands and
-// leaves, so contacts close and open; after it has left nothing changes.
+// leaves, so contacts close and open; after it has left nothing changes. The run's totals are
+// the sums of the rows.
 TEST(ContactObservables, StatusChangesBoundTheCountChanges) {
   for (const char* scheme : {"semi_explicit", "implicit", "explicit_penalty"}) {
     const RunResult r = run("cases/oblique_plate.toml", {std::string("scheme=\"") + scheme + "\"", "mesh=\"M1\"",
@@ -91,9 +92,10 @@ TEST(ContactObservables, StatusChangesBoundTheCountChanges) {
                       sl = h.column("contact_slip");
     ASSERT_EQ(h.rows(), static_cast<std::size_t>(r.steps + 1)) << scheme;
     double total = 0.0, closed_max = 0.0;
-    long last_change = -1;
+    long last_change = -1, steps_with_changes = 0;
     for (std::size_t i = 1; i < h.rows(); ++i) {
       const double changes = h.at(i, ch);
+      steps_with_changes += changes > 0.0;
       const double d_stick = std::abs(h.at(i, st) - h.at(i - 1, st)), d_slip = std::abs(h.at(i, sl) - h.at(i - 1, sl));
       const double d_closed = std::abs(h.at(i, st) + h.at(i, sl) - h.at(i - 1, st) - h.at(i - 1, sl));
       ASSERT_GE(changes, std::max({d_stick, d_slip, d_closed})) << scheme << " row " << i;
@@ -105,6 +107,10 @@ TEST(ContactObservables, StatusChangesBoundTheCountChanges) {
     EXPECT_GE(total, 2.0 * closed_max) << scheme << ": every closed contact closed and opened again";
     EXPECT_EQ(last(h, "contact_stick") + last(h, "contact_slip"), 0.0) << scheme << ": the plate has left";
     EXPECT_LT(last_change, static_cast<long>(h.rows()) - 10) << scheme << ": no changes in free flight";
+    // The run's totals (summary.json contact_iterations.status_changes, status_change_steps)
+    // are the sums over every step: here every step is a history row.
+    EXPECT_EQ(static_cast<double>(r.contact_status_changes), total) << scheme;
+    EXPECT_EQ(r.contact_status_change_steps, steps_with_changes) << scheme;
   }
 }
 

@@ -143,6 +143,23 @@ TEST(ArcPlate, DefaultCountsAreaAndOrientation) {
   expect_sets_sorted_unique(m);
 }
 
+TEST(ArcPlate, TrianglesSplitEveryQuadWithTheSameNodesAndArea) {
+  const Mesh q = make_arc_plate({});
+  const Mesh t = make_arc_plate({.triangles = true});
+  EXPECT_TRUE(t.quads.empty());
+  ASSERT_EQ(t.tris.size(), 2 * q.quads.size());
+  EXPECT_EQ(t.nodes, q.nodes);  // the same nodes, bit for bit
+  EXPECT_EQ(t.node_sets, q.node_sets);
+  EXPECT_NEAR(checked_area(t), checked_area(q), 1e-15);  // every triangle counter-clockwise
+  // Each pair of triangles (2k, 2k+1) covers quad k: together they use its four corners.
+  for (std::size_t k = 0; k < q.quads.size(); ++k) {
+    std::set<int> corners(q.quads[k].begin(), q.quads[k].end());
+    std::set<int> used(t.tris[2 * k].begin(), t.tris[2 * k].end());
+    used.insert(t.tris[2 * k + 1].begin(), t.tris[2 * k + 1].end());
+    EXPECT_EQ(used, corners) << "quad " << k;
+  }
+}
+
 TEST(ArcPlate, AreaConvergesAtSecondOrder) {
   double error[3];
   for (int k = 0; k < 3; ++k) {

@@ -62,6 +62,7 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
       a.ny = static_cast<int>(t.integer("ny", 32, 1, kMaxDivisions));
       a.bias = t.number("bias", 1.0, Range::positive());
       a.height_is_overall = t.choice("height_is", "side", {"side", "overall"}) == "overall";
+      a.triangles = t.choice("cells", "quad", {"quad", "tri"}) == "tri";
       m.source = a;
     }
     // Interior nodes moved at random by up to distort x the local element size (distort_mesh).

@@ -159,7 +159,7 @@ Mesh make_arc_plate(const ArcPlateSpec& spec) {
           j == ny ? y_top : y_bottom + (y_top - y_bottom) * t[static_cast<std::size_t>(j)];
     }
   }
-  fill_grid_topology(mesh, nx, ny, false);
+  fill_grid_topology(mesh, nx, ny, spec.triangles);
   mesh.node_sets["top_left"] = {ny * (nx + 1)};
   mesh.node_sets["top_right"] = {ny * (nx + 1) + nx};
   if (nx % 2 == 0)

@@ -35,12 +35,14 @@ Mesh make_rectangle(const RectangleSpec& spec);
 // between graded geometrically so that (top row cell height)/(bottom row cell height) = bias
 // (bias > 1 refines towards the arc). Node sets: bottom (the arc), top, left, right,
 // boundary, all, top_left, top_right, lowest (the arc node at x = 0 for even nx, the two
-// nearest x = 0 for odd nx).
+// nearest x = 0 for odd nx). With `triangles`, each quad becomes two T3 cells, the diagonals
+// alternating by column as for the rectangle (mirror-symmetric about x = 0 for even nx).
 struct ArcPlateSpec {
   double width = 0.04, height = 0.08, radius = 0.101;  // [m], finite, > 0, radius > width/2
   int nx = 12, ny = 32;                                // cells across and up, >= 1
   bool height_is_overall = false;  // height measured from the arc's lowest point
   double bias = 1.0;               // [-], finite and > 0
+  bool triangles = false;
 };
 Mesh make_arc_plate(const ArcPlateSpec& spec);
 

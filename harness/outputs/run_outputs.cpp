@@ -257,6 +257,10 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   // those steps): a contact duration that gates can compare across time steps and meshes.
   ci["contact_time"] = r.dt_update_interval > 0 ? r.contact_time : static_cast<double>(r.contact_steps) * r.dt;
   ci["unconverged_steps"] = r.contact_unconverged_steps;
+  // Chatter of the active set: status changes (open, stick, slip) summed over every step, and
+  // the steps that had any.
+  ci["status_changes"] = r.contact_status_changes;
+  ci["status_change_steps"] = r.contact_status_change_steps;
   ci["candidates"] = r.contact_candidates;
   j["contact_iterations"] = ci;
   const History& h = r.history;

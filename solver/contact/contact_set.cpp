@@ -76,6 +76,7 @@ void finish_step(ContactSet& c, int iterations, bool converged) {
   c.last.iterations = iterations;
   c.last.converged = converged;
   c.total.status_changes += c.last.status_changes;
+  c.total.steps_with_status_changes += c.last.status_changes > 0;
   if (!converged) ++c.total.unconverged_steps;
   if (c.active.empty()) return;
   ++c.total.steps_with_contact;

@@ -89,6 +89,7 @@ struct ContactTotals {
   int iterations_max = 0;
   long unconverged_steps = 0;         // steps whose solve hit its iteration cap
   long status_changes = 0;            // sum of ContactStep::status_changes
+  long steps_with_status_changes = 0; // steps with ContactStep::status_changes > 0
 };
 
 // An interface: one rigid obstacle, or one contact pair (both passes of a two-pass pair are

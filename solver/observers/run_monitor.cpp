@@ -467,6 +467,8 @@ void RunMonitor::finish(const State& s) {
   result_.contact_steps = c.steps_with_contact;
   result_.contact_sweeps_max = c.iterations_max;
   result_.contact_unconverged_steps = c.unconverged_steps;
+  result_.contact_status_changes = c.status_changes;
+  result_.contact_status_change_steps = c.steps_with_status_changes;
   if (c.steps_with_contact > 0)
     result_.contact_sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
 }

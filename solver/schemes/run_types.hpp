@@ -182,6 +182,8 @@ struct RunResult {
   int contact_sweeps_max = 0;
   long contact_steps = 0;          // steps with at least one active contact
   long contact_unconverged_steps = 0;  // steps that hit the sweep cap
+  long contact_status_changes = 0;     // sum over the steps of the candidates whose status changed
+  long contact_status_change_steps = 0;  // steps in which at least one status changed
   long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
   long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
   bool direct_solver = false;      // implicit scheme: CHOLMOD Cholesky (true) or PCG (false)
