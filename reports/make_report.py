@@ -2,13 +2,15 @@
 """The report of a sweep: for any sweep its runs (with the gate results), work-precision
 diagrams per error metric, each run's history and the runs that failed; for the paper's sweep
 (cases/paper_table1.toml) also Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside
-the paper's numbers, with the accuracy sweep, the stability map, penetration over time, the
-verification cases and the Kim–Kwak-type problem.
+the paper's numbers, with the accuracy sweep, the stability map, the stability envelope and the
+long runs (report_stability.py), penetration over time, the verification cases and the
+Kim–Kwak-type problem.
 
     /usr/bin/python3 reports/make_report.py DIR [--accuracy ACC_DIR] [--stability PATH ...]
                                                 [--verification VER_DIR] [--kim-kwak KK_DIR]
-                                                [--kim-kwak-fields FIELDS_DIR] [--out OUT]
-                                                [--max-run-plots N] [--no-discover]
+                                                [--kim-kwak-fields FIELDS_DIR]
+                                                [--envelope ENV_DIR] [--long-runs LONG_DIR]
+                                                [--out OUT] [--max-run-plots N] [--no-discover]
 
 DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
            named paper_table1 or has the groups table1, penalty and friction.
@@ -21,12 +23,20 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            and its gates: report_kim_kwak.py). Without it, DIR itself when its runs are that case.
 --kim-kwak-fields a run of cases/kim_kwak/rubber_groove.toml with its fields/*.vtu (the
            deformed shapes of the Kim–Kwak-type problem).
+--envelope a finished sweep of cases/envelope/envelope.toml (the stability envelope: largest
+           stable step / estimate per parameter and scheme, the points where the automatic step
+           is not stable, the remedy runs: report_stability.py). Without it, DIR itself when it
+           is such a sweep (stability searches with `stable_over_estimate`).
+--long-runs a finished sweep of cases/long_runs/sweep.toml with the drift.csv of
+           reports/long_runs.py (energy residual per scene and scheme, the drift table). Without
+           it, DIR itself when it holds a drift.csv.
 --out      report folder (default DIR/report).
 --max-run-plots N  draw the histories of at most N runs (default 30).
 For the paper's sweep, without --accuracy / --stability / --verification / --kim-kwak /
---kim-kwak-fields, the script looks for DIR/../accuracy, DIR/accuracy, DIR/../stability,
-DIR/stability, DIR/../verification, DIR/verification, DIR/../kim_kwak, DIR/kim_kwak,
-DIR/../rubber_groove and DIR/rubber_groove (unless --no-discover); a source that is missing
+--kim-kwak-fields / --envelope / --long-runs, the script looks for DIR/../accuracy,
+DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification, DIR/verification,
+DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove, DIR/rubber_groove, DIR/../envelope,
+DIR/envelope, DIR/../long_runs and DIR/long_runs (unless --no-discover); a source that is missing
 gives a "not available" section saying how to produce it, never a crash. For any other sweep
 only DIR/stability is looked for, and parts without data are left out.
 
@@ -55,6 +65,7 @@ import numpy as np  # noqa: E402
 import report_figures as F  # noqa: E402
 import report_generic as RG  # noqa: E402
 import report_kim_kwak as RK  # noqa: E402
+import report_stability as RS  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
                        fmt_dt, fmt_g, git_commit, read_reference, read_stability, same,
@@ -129,8 +140,9 @@ def html_table(tid, header, rows):
         for c in r:
             bad = re.match(r"\**(diverged|failed|missing)\b", str(c))
             cls = ' class="diverged"' if bad else ""
-            if not bad and len(str(c)) <= 12 and " " not in str(c).strip():
-                cls = ' class="nw"'   # a short number or word: never broken
+            if not bad and (len(str(c)) <= 12 or re.fullmatch(r"`[^`\s]{1,30}`", str(c))) \
+                    and " " not in str(c).strip():
+                cls = ' class="nw"'   # a short number, word or run id: never broken
             cells.append(f"<td{cls}>{md_inline_to_html(str(c))}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
@@ -813,6 +825,8 @@ PAPER_SECTIONS = [
     ("work_precision", sec_work_precision),
     ("scheme_limits", sec_scheme_limits),
     ("stability", sec_stability),
+    ("envelope", lambda c: RS.envelope_sections(c, Section)),   # figure, unsafe-points table
+    ("long_runs", lambda c: RS.long_run_sections(c, Section)),  # residual figure, drift table
     ("penetration", sec_penetration),
     ("verification", lambda c: RV.sections(c, Section)),   # one section per verification case
     ("kim_kwak", lambda c: RK.sections(c, Section)),       # shapes, histories, runs table
@@ -828,6 +842,8 @@ SWEEP_SECTIONS = [
     ("work_precision", sec_sweep_wp),
     ("scheme_limits", sec_sweep_scheme_limits),
     ("stability", sec_stability),
+    ("envelope", lambda c: RS.envelope_sections(c, Section) if c.get("env") else []),
+    ("long_runs", lambda c: RS.long_run_sections(c, Section) if c.get("long") else []),
     ("verification", lambda c: RV.sections(c, Section) if c.get("ver") else []),
     ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")
      else []),
@@ -854,6 +870,7 @@ h3{font-size:1.05em} h3.sec{font-size:1.2em;margin-top:1.6em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
 th{background:#f0f0f0} td.diverged{background:#fdecea} td.nw{white-space:nowrap}
+td.nw code{word-break:normal}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
 code{font-size:.85em;background:#f4f4f4;padding:0 .2em;word-break:break-all}
@@ -980,6 +997,8 @@ def render(ctx, sections):
            "verification": ctx["ver"].dir if ctx.get("ver") else None,
            "kim_kwak": ctx["kk"].dir if ctx.get("kk") else None,
            "kim_kwak_fields": ctx.get("kk_fields"),
+           "envelope": ctx["env"][0].dir if ctx.get("env") else None,
+           "long_runs": ctx["long"].dir if ctx.get("long") else None,
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
@@ -1019,7 +1038,8 @@ def discover(main_dir, args):
         fields = next((c for c in places("rubber_groove") if RK.find_fields(c)), None)
     return (sweep_folder(args.accuracy, "accuracy"), stab,
             sweep_folder(args.verification, "verification"), sweep_folder(args.kim_kwak, "kim_kwak"),
-            os.path.abspath(fields) if fields else None)
+            os.path.abspath(fields) if fields else None,
+            sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"))
 
 
 def kk_meta(kk, err):
@@ -1036,6 +1056,23 @@ def kk_fields_meta(folder):
         return ("not available" + (f" (no fields/*.vtu in `{folder}`)" if folder else "")
                 + f": run `{RK.FIELDS_CMD}`")
     return f"`{show_path(folder)}` ({len(field_files(fdir))} field files)"
+
+
+def env_meta(env, err):
+    if env is None:
+        return ("not available" + (f" ({err})" if err else "") + f": run `{RS.ENV_CMD}`")
+    sw, points = env
+    n = sum(p.kind == "stability" for p in points)
+    return (f"`{sw.dir}` ({n} stability searches, {len(points) - n} runs; finished "
+            f"{sw.meta.get('finished_at', '?')})")
+
+
+def long_meta(sw, err):
+    if sw is None:
+        return ("not available" + (f" ({err})" if err else "") + f": run `{RS.LONG_CMD}`")
+    drift = os.path.isfile(os.path.join(sw.dir, "drift.csv"))
+    return (f"`{sw.dir}` ({len(sw.runs)} runs; "
+            + ("with drift.csv" if drift else f"no drift.csv: run `{RS.LONG_DRIFT_CMD}`") + ")")
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -1069,7 +1106,14 @@ def generic_sources(main_sweep, args):
                                                                          "stability")):
         stab = [os.path.join(main_sweep.dir, "stability")]
     fields = os.path.abspath(args.kim_kwak_fields) if args.kim_kwak_fields else None
-    return args.accuracy, stab, ver, kk, fields
+    env = args.envelope
+    if env is None and "stable_over_estimate" in main_sweep.columns and any(
+            r.kind == "stability" for r in main_sweep.runs):
+        env = main_sweep.dir
+    long_dir = args.long_runs
+    if long_dir is None and os.path.isfile(os.path.join(main_sweep.dir, "drift.csv")):
+        long_dir = main_sweep.dir
+    return args.accuracy, stab, ver, kk, fields, env, long_dir
 
 
 def main(argv=None):
@@ -1084,12 +1128,17 @@ def main(argv=None):
                     help="Kim–Kwak-type sweep folder (cases/kim_kwak/sweep.toml)")
     ap.add_argument("--kim-kwak-fields", metavar="FIELDS_DIR",
                     help="run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu")
+    ap.add_argument("--envelope", metavar="ENV_DIR",
+                    help="stability-envelope sweep folder (cases/envelope/envelope.toml)")
+    ap.add_argument("--long-runs", metavar="LONG_DIR",
+                    help="long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv "
+                         "(reports/long_runs.py)")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
     ap.add_argument("--no-discover", action="store_true",
-                    help="do not look for accuracy/, stability/, verification/, kim_kwak/ and "
-                         "rubber_groove/ next to DIR")
+                    help="do not look for accuracy/, stability/, verification/, kim_kwak/, "
+                         "rubber_groove/, envelope/ and long_runs/ next to DIR")
     args = ap.parse_args(argv)
     if args.max_run_plots < 0:
         ap.error(f"--max-run-plots {args.max_run_plots}: must be 0 or more")
@@ -1110,15 +1159,26 @@ def main(argv=None):
               file=sys.stderr)
         return 1
     if paper:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = discover(args.dir, args)
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir = \
+            discover(args.dir, args)
     else:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields = generic_sources(main_sweep, args)
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir = \
+            generic_sources(main_sweep, args)
     same_dir = lambda d: d is not None and os.path.abspath(d) == main_sweep.dir  # noqa: E731
     acc, acc_err = read_sweep(acc_dir, "accuracy") if acc_dir else (None, None)
     ver, ver_err = ((main_sweep, None) if same_dir(ver_dir) else
                     read_sweep(ver_dir, "verification") if ver_dir else (None, None))
     kk, kk_err = ((main_sweep, None) if same_dir(kk_dir) else
                   read_sweep(kk_dir, "kim_kwak") if kk_dir else (None, None))
+    long_sw, long_err = ((main_sweep, None) if same_dir(long_dir) else
+                         read_sweep(long_dir, "long_runs") if long_dir else (None, None))
+    env, env_err = None, None     # env: (Sweep, [EnvPoint]) of the envelope sweep
+    if env_dir:
+        sw_env, got = RS.read_envelope(env_dir)
+        if sw_env is None:
+            env_err = got
+        else:
+            env = (sw_env, got)
     stab_files = find_stability_files(stab_paths)
     ref = read_reference()
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -1127,7 +1187,8 @@ def main(argv=None):
     ctx = {"main": main_sweep, "acc": acc, "stab_files": stab_files, "ref": ref, "out": out,
            "now": now, "ver": ver, "ver_err": ver_err, "kk": kk, "kk_err": kk_err,
            "kk_fields": kk_fields, "paper": paper, "title": title,
-           "max_run_plots": args.max_run_plots}
+           "max_run_plots": args.max_run_plots, "env": env, "env_err": env_err,
+           "long": long_sw, "long_err": long_err}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -1163,6 +1224,8 @@ def main(argv=None):
             ("Stability results", (", ".join(f"`{show_path(p)}`" for p in stab_files)
                                    if stab_files else
                                    f"not available: run `{STAB_CMD}` {STAB_MORE}")),
+            ("Stability-envelope sweep", env_meta(env, env_err)),
+            ("Long-run sweep", long_meta(long_sw, long_err)),
         ] + common_tail + [
             ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & "
                                 "Magnain, C. R. Mécanique 338 (2010) 176–180)"),
@@ -1183,6 +1246,14 @@ def main(argv=None):
             meta.append(("Kim–Kwak-type fields run", kk_fields_meta(kk_fields)))
         if stab_files:
             meta.append(("Stability results", ", ".join(f"`{show_path(p)}`" for p in stab_files)))
+        if env is not None and env[0].dir != main_sweep.dir:
+            meta.append(("Stability-envelope sweep", env_meta(env, env_err)))
+        elif env_err:
+            meta.append(("Stability-envelope sweep", f"could not be read ({env_err})"))
+        if long_sw is not None and long_sw is not main_sweep:
+            meta.append(("Long-run sweep", long_meta(long_sw, long_err)))
+        elif long_err:
+            meta.append(("Long-run sweep", f"could not be read ({long_err})"))
         meta += common_tail + [("Report written", now)]
     ctx["meta"] = meta
 

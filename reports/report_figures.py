@@ -14,7 +14,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
-from matplotlib.ticker import FuncFormatter, ScalarFormatter  # noqa: E402
+from matplotlib.ticker import (FixedLocator, FuncFormatter, LogLocator, NullLocator,  # noqa: E402
+                               ScalarFormatter)
 from matplotlib.transforms import Bbox  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -965,3 +966,157 @@ def fig_work_precision(outdir, stem, panels, ylabel, xlabel, title, floor_label)
         left_out += _place_labels(fig, ax, items, [(p["x"], p["y"]) for p in pts]
                                   + (guides[id(ax)] or []))
     return save(fig, outdir, stem), left_out, any_guides
+
+
+# ---------------------------------------------------------------------------------------------
+# Stability envelope and long runs (report_stability.py)
+
+SERIES_COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+                 "#17becf", "#7f7f7f", "#bcbd22"]
+
+
+def fig_envelope(outdir, stem, rows, schemes, safety):
+    """The stability envelope: rows = [(title, x label, [x tick labels], [(series label,
+    [(x index, point)])])], each point with .scheme, .ratio (largest stable Δt / estimate) and
+    .outcome; one column per scheme (log y axis shared down the column), one row per parameter
+    family. Bracketed: filled circle; up to the cap: open up-triangle at the value; run limit:
+    open circle; no stable Δt: down-triangle in a band at the bottom. The automatic step
+    (safety × the estimate) is a dashed line, the region below it shaded."""
+    nr, nc = len(rows), len(schemes)
+    fig, axes = plt.subplots(nr, nc, figsize=(3.4 * nc + 2.5, 2.55 * nr + 0.8), squeeze=False,
+                             sharey="col")
+    # y range per column: every ratio drawn, the safety line and 1
+    for j, sc in enumerate(schemes):
+        vals = [p.ratio for _, _, _, ser in rows for _, pts in ser for _, p in pts
+                if p.scheme == sc and p.ratio is not None
+                and p.outcome != "no_stable_down_to_floor"]
+        lo = min(vals + [safety, 1.0])
+        hi = max(vals + [safety, 1.0])
+        axes[0][j].set_yscale("log")
+        # room at the bottom for the band of "no stable Δt"
+        axes[0][j].set_ylim(lo / 2.6, hi * 1.6)
+        # labelled ticks at 1, 2, 5 x 10^k over a narrow range, at the decades over a wide one
+        subs = (1.0, 2.0, 5.0) if hi / lo < 300 else (1.0,)
+        axes[0][j].yaxis.set_major_locator(LogLocator(base=10, subs=subs))
+        axes[0][j].yaxis.set_minor_locator(NullLocator())
+    for i, (title, xlabel, ticks, series) in enumerate(rows):
+        nser = max(1, len(series))
+        width = min(0.7, 0.16 * nser)
+        for j, sc in enumerate(schemes):
+            ax = axes[i][j]
+            ax.axhline(safety, color="k", ls="--", lw=1.1, zorder=2)
+            ax.axhline(1.0, color="0.55", ls=":", lw=0.9, zorder=2)
+            ax.axhspan(1e-12, safety, color="#d62728", alpha=0.06, lw=0, zorder=0)
+            ax.axhspan(1e-12, ax.get_ylim()[0] * 1.28, color="0.85", lw=0, zorder=1)
+            ax.set_xticks(range(len(ticks)))
+            ax.set_xticklabels(ticks)
+            ax.set_xlim(-0.6, len(ticks) - 0.4)
+            any_pt = False
+            for k, (label, pts) in enumerate(series):
+                c = SERIES_COLORS[k % len(SERIES_COLORS)]
+                off = (k - (nser - 1) / 2) * (width / max(1, nser - 1)) if nser > 1 else 0.0
+                mine = sorted([(x, p) for x, p in pts if p.scheme == sc], key=lambda t: t[0])
+                line = [(x + off, p.ratio) for x, p in mine
+                        if p.ratio is not None and p.outcome != "no_stable_down_to_floor"]
+                if len(line) > 1:
+                    ax.plot(*zip(*line), color=c, lw=0.9, alpha=0.55, zorder=3)
+                for x, p in mine:
+                    any_pt = True
+                    xo = x + off
+                    if p.outcome == "no_stable_down_to_floor":
+                        ax.plot(xo, ax.get_ylim()[0] * 1.13, marker="v", ms=6, color=c,
+                                ls="none", zorder=4, clip_on=False)
+                    elif p.ratio is None:
+                        continue
+                    elif p.outcome == "no_unstable_up_to_cap":
+                        ax.plot(xo, p.ratio, marker="^", ms=7, mfc="white", mec=c, mew=1.5,
+                                ls="none", zorder=4)
+                    elif p.outcome == "bracketed":
+                        ax.plot(xo, p.ratio, marker="o", ms=5.5, color=c, ls="none", zorder=4)
+                    else:
+                        ax.plot(xo, p.ratio, marker="o", ms=6, mfc="white", mec=c, mew=1.3,
+                                ls="none", zorder=4)
+            if not any_pt:
+                ax.text(0.5, 0.5, "no search of this scheme" + (
+                    "\n(the penalty scheme has no contact level)"
+                    if sc == "explicit_penalty" and "contact level" in title else ""),
+                    ha="center", va="center", transform=ax.transAxes, color="0.4", fontsize=8.5,
+                    bbox=dict(facecolor="white", edgecolor="none", alpha=0.9))
+            ax.set_title(title, fontsize=9)
+            if i == 0:   # the column's scheme, above its first panel
+                ax.text(0.5, 1.16, scheme_name(sc), transform=ax.transAxes, ha="center",
+                        va="bottom", fontsize=11.5, fontweight="bold", color=color(sc))
+            ax.set_xlabel(xlabel, fontsize=8.5)
+            ax.grid(True, which="major", axis="y", alpha=0.3)
+            ax.grid(False, axis="x")
+            if j == 0:
+                ax.set_ylabel("largest stable Δt / estimate")
+        handles = [Line2D([0], [0], color=SERIES_COLORS[k % len(SERIES_COLORS)], marker="o",
+                          ms=5.5, lw=0.9, label=lab) for k, (lab, _) in enumerate(series)]
+        axes[i][-1].legend(handles=handles, loc="center left", bbox_to_anchor=(1.03, 0.5),
+                           frameon=False, fontsize=8)
+    for ax in axes.flat:
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    outcomes = {p.outcome for _, _, _, ser in rows for _, pts in ser for _, p in pts}
+    handles = [Line2D([0], [0], marker="o", color="0.3", ls="none", ms=5.5, label="bracketed")]
+    if "no_unstable_up_to_cap" in outcomes:
+        handles.append(Line2D([0], [0], marker="^", mfc="white", mec="0.3", mew=1.5, ls="none",
+                              ms=7, label="stable up to the search cap (drawn at the cap)"))
+    if outcomes - {"bracketed", "no_unstable_up_to_cap", "no_stable_down_to_floor"}:
+        handles.append(Line2D([0], [0], marker="o", mfc="white", mec="0.3", mew=1.3, ls="none",
+                              ms=6, label="search stopped at its run limit (lower bound)"))
+    handles += [
+        Line2D([0], [0], marker="v", color="0.3", ls="none", ms=6,
+               label="no stable Δt down to the floor (grey band)"),
+        Line2D([0], [0], color="k", ls="--", lw=1.1,
+               label=f"automatic step: time.safety = {safety:g} × estimate"),
+        Line2D([0], [0], color="0.55", ls=":", lw=0.9, label="the estimate min L_e/c_p"),
+        Patch(facecolor="#d62728", alpha=0.12, label="automatic step not stable"),
+    ]
+    fig.tight_layout(h_pad=1.2, w_pad=0.8)
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
+               frameon=False, fontsize=8.5)
+    return save(fig, outdir, stem)
+
+
+def fig_long_runs(outdir, stem, panels):
+    """Long runs: panels = [(title, [(label, scheme, step numbers, R / E_ref)])]; one panel per
+    scene, a line per scheme, symmetric log y axis (linear within the smallest residual's
+    decade, shaded)."""
+    n = len(panels)
+    nc = 2 if n > 1 else 1
+    nr = (n + nc - 1) // nc
+    fig, axes = plt.subplots(nr, nc, figsize=(6.2 * nc, 3.9 * nr), squeeze=False)
+    for ax, (title, lines) in zip(axes.flat, panels):
+        peaks = [float(np.nanmax(np.abs(r))) for _, _, _, r in lines
+                 if np.isfinite(r).any() and np.nanmax(np.abs(r)) > 0]
+        lin = max(min(peaks) / 10, 1e-12) if peaks else 1e-12
+        for label, scheme, steps, r in lines:
+            ax.plot(steps, r, color=color(scheme), lw=0.8, label=label)
+        ax.set_yscale("symlog", linthresh=lin, linscale=1.0)
+        ax.axhspan(-lin, lin, color="0.9", lw=0, zorder=0)
+        ax.axhline(0.0, color="k", lw=0.6)
+        # ticks: 0 and ±10^k beyond the linear band, every other decade when there are many
+        y0, y1 = ax.get_ylim()
+        k0 = int(np.ceil(np.log10(3 * lin)))      # no tick crowding the 0 tick
+        k1 = int(np.ceil(np.log10(max(abs(y0), abs(y1), lin * 10))))
+        step = 1 if k1 - k0 <= 4 else 2
+        ks = list(range(k1, k0 - 1, -step))
+        ticks = [0.0] + [s * 10.0 ** k for k in ks for s in (1, -1)
+                         if (y0 <= s * 10.0 ** k <= y1)]
+        ax.yaxis.set_major_locator(FixedLocator(sorted(ticks)))
+        ax.yaxis.set_minor_locator(NullLocator())
+        ax.yaxis.set_major_formatter(FuncFormatter(
+            lambda v, _: "0" if v == 0 else
+            ("−" if v < 0 else "") + f"10$^{{{int(round(np.log10(abs(v))))}}}$"))
+        ax.set_title(title, fontsize=9.5)
+        ax.set_xlabel("time step n = t / Δt")
+        ax.set_ylabel(f"energy residual R / E_ref (–)\nsymlog, linear within ±{fmt_g(lin, 1)}",
+                      fontsize=8.5)
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}".replace(",", " ")))
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=1, frameon=False,
+                  fontsize=8)
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    fig.tight_layout(h_pad=2.0)
+    return save(fig, outdir, stem, svg=False)   # 1e4 samples a line: no SVG

@@ -11,11 +11,18 @@ Builds, in a temporary folder and with the given ricochet binary:
     schemes) on coarse meshes;
   * the Kim–Kwak-type sweep cases/kim_kwak/sweep.toml with its gates (five runs, ~2.5 s, in the
     background while the other sweeps run), placed next to the paper sweep so that the report
-    discovers it, and one run of cases/kim_kwak/rubber_groove.toml with its fields.
-Then runs the report twice: without the accuracy, stability, verification and Kim–Kwak-type
-sources (those sections must say "not available" and how to produce them, everything else must
-be there), and with them (every section available, except the verification cases not in the
-tiny sweep, which must say so). Checks that every figure file exists and is non-empty, that every
+    discovers it, and one run of cases/kim_kwak/rubber_groove.toml with its fields;
+  * a synthetic stability-envelope sweep (a summary.csv of searches and remedy runs, ENV_ROWS)
+    next to the paper sweep (discovered), and a tiny long-run sweep (two scenes, 0.03 s each, a
+    failed row added) with its drift.csv written by reports/long_runs.py (given with
+    --long-runs).
+Then runs the report twice: without the accuracy, stability, verification, Kim–Kwak-type,
+envelope and long-run sources (those sections must say "not available" and how to produce
+them, everything else must be there), and with them (every section available, except the
+verification cases not in the tiny sweep, which must say so). The envelope's table of unsafe
+points must list exactly the searches below 0.9 x the estimate or without a stable step; the
+long-run table one row per drift.csv row. The envelope and long-run sections are also built
+with partial sources (none, no drift.csv, only a failed search). Checks that every figure file exists and is non-empty, that every
 table has its expected rows and columns (computed here from the sweeps' summary.csv), and that
 every figure's caption names its runs. The Kim–Kwak-type sections are also built with only one
 of their two sources.
@@ -152,6 +159,110 @@ KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
 KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
 KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
 KK_IDS = ("kk_shapes", "kk_histories", "kk_interfaces", "kk_runs")
+ENV_IDS = ("envelope", "envelope_unsafe")           # report_stability.py: the envelope sweep
+LONG_IDS = ("long_runs", "long_runs_table")         # and the long-run sweep with drift.csv
+LONG_RUNS_PY = os.path.join(REPO, "reports", "long_runs.py")
+
+# A tiny long-run sweep (cases/long_runs/sweep.toml's scenes, 0.03 s each, ~500 steps); the test
+# adds a failed row to its summary.csv and writes drift.csv with reports/long_runs.py.
+LONG_SWEEP = f"""
+name = "tiny_long_runs"
+
+[[group]]
+name = "block_resting"
+base = "{os.path.join(REPO, "cases", "long_runs", "block_resting.toml")}"
+set = {{ "time.end" = 0.03, "output.interval" = 6e-4 }}
+cross = {{ scheme = ["semi_explicit", "explicit_penalty"] }}
+
+[[group]]
+name = "block_sliding"
+base = "{os.path.join(REPO, "cases", "long_runs", "block_sliding.toml")}"
+set = {{ "time.end" = 0.03, "output.interval" = 6e-4 }}
+cross = {{ scheme = ["semi_explicit", "implicit"] }}
+"""
+LONG_FAILED = "ball_bouncing/000-scheme=semi_explicit"   # a failed row, no run folder
+
+# A synthetic stability-envelope sweep (the summary.csv of cases/envelope/envelope.toml, few
+# rows): (run id, kind, status, scheme, overrides, outcome, stable/estimate, unsafe). The automatic
+# step is 0.9 x the estimate: unsafe = stable/estimate < 0.9 or no stable step at all.
+V = {1: "[0.514496, -0.857493]", 5: "[2.57248, -4.28746]", 20: "[10.2899, -17.1499]",
+     50: "[25.7248, -42.8746]"}
+ENV_ROWS = [
+    ("speed_friction/000-scheme=semi_explicit_v1_mu0", "stability", "ok", "semi_explicit",
+     {"bodies[0].velocity": V[1], "obstacles[0].friction": "0.0"}, "bracketed", 1.262, False),
+    ("speed_friction/001-scheme=semi_explicit_v50_mu0.5", "stability", "ok", "semi_explicit",
+     {"bodies[0].velocity": V[50], "obstacles[0].friction": "0.5"}, "no_stable_down_to_floor",
+     None, True),
+    ("speed_friction/002-scheme=explicit_penalty_v50_mu0", "stability", "ok", "explicit_penalty",
+     {"bodies[0].velocity": V[50], "obstacles[0].friction": "0.0"}, "bracketed", 0.6, True),
+    ("speed_friction/003-scheme=implicit_v1_mu0", "stability", "ok", "implicit",
+     {"bodies[0].velocity": V[1], "obstacles[0].friction": "0.0"}, "no_unstable_up_to_cap", 156.2,
+     False),
+    ("speed_friction/004-scheme=implicit_v50_mu0.5", "stability", "ok", "implicit",
+     {"bodies[0].velocity": V[50], "obstacles[0].friction": "0.5"}, "bracketed", 0.95, False),
+    ("speed_friction/005-scheme=semi_explicit_v20_mu0.1", "stability", "ok", "semi_explicit",
+     {"bodies[0].velocity": V[20], "obstacles[0].friction": "0.1"}, "run_limit", 0.85, True),
+    ("speed_friction/006-scheme=explicit_penalty_v5_mu0.1", "stability", "failed",
+     "explicit_penalty", {"bodies[0].velocity": V[5], "obstacles[0].friction": "0.1"}, "", None,
+     False),
+    ("neo_hookean/000-scheme=semi_explicit_v50", "stability", "ok", "semi_explicit",
+     {"bodies[0].material.model": '"neo_hookean"', "bodies[0].velocity": V[50]}, "bracketed",
+     0.699, True),
+    ("element_t3/000-scheme=semi_explicit_distort0.2", "stability", "ok", "semi_explicit",
+     {"meshes.M1.cells": '"tri"', "meshes.M1.distort": "0.2"}, "bracketed", 1.66, False),
+    ("contact_level/000-scheme=implicit_velocity_mu0.1_v5", "stability", "ok", "implicit",
+     {"contact.level": '"velocity"', "obstacles[0].friction": "0.1",
+      "bodies[0].velocity": V[5]}, "bracketed", 0.89, True),
+    ("remedy_neo_hookean/000-scheme=semi_explicit", "run", "ok", "semi_explicit",
+     {"bodies[0].material.model": '"neo_hookean"', "bodies[0].velocity": V[50],
+      "time.dt_update_interval": "1"}, "", None, False),
+    ("remedy_neo_hookean/001-scheme=explicit_penalty", "run", "diverged", "explicit_penalty",
+     {"bodies[0].material.model": '"neo_hookean"', "bodies[0].velocity": V[50],
+      "time.dt_update_interval": "1"}, "", None, False),
+]
+
+
+def write_envelope(folder):
+    """ENV_ROWS as a sweep's summary.csv (docs/sweeps.md, search columns) in FOLDER."""
+    keys = ["bodies[0].velocity", "obstacles[0].friction", "bodies[0].material.model",
+            "meshes.M1.cells", "meshes.M1.distort", "contact.level", "time.dt_update_interval"]
+    cols = ["run_id", "group", "kind", "status", "reason", "time.dt", "scheme"] + keys + [
+        "case", "case_file", "overrides", "summary.scheme", "mesh", "critical_dt", "dt", "dt_min",
+        "dt_max", "steps", "energy_error_max", "diverged.time", "stable_dt", "unstable_dt",
+        "estimate_dt", "stable_over_estimate", "outcome", "converged", "trials",
+        "unstable_reason"]
+    est = 1.921108115727834e-05
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "summary.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=cols, lineterminator="\n")
+        w.writeheader()
+        for rid, kind, status, scheme, over, outcome, ratio, _ in ENV_ROWS:
+            r = {"run_id": rid, "group": rid.split("/")[0], "kind": kind, "status": status,
+                 "time.dt": "auto", "scheme": scheme, "summary.scheme": scheme, "mesh": "M1",
+                 "case": "oblique_plate", "case_file": "cases/oblique_plate.toml",
+                 "overrides": json.dumps(['time.dt="auto"', f'scheme="{scheme}"'] +
+                                         [f"{k}={v}" for k, v in over.items()])}
+            r.update({k: v.strip('"') for k, v in over.items()})
+            if kind == "stability" and status == "ok":
+                r.update(estimate_dt=repr(est), outcome=outcome, trials="9",
+                         converged="true" if outcome == "bracketed" else "false")
+                if ratio is not None:
+                    r.update(stable_dt=repr(ratio * est), stable_over_estimate=repr(ratio))
+                if outcome == "no_stable_down_to_floor":
+                    r.update(unstable_dt=repr(est / 1000),
+                             unstable_reason="diverged: inverted element (det F = -0.0001)")
+                elif outcome != "no_unstable_up_to_cap":
+                    r.update(unstable_dt=repr(ratio * est * 1.01),
+                             unstable_reason="diverged: energy growth: test")
+            elif kind == "stability":
+                r["reason"] = "exit 2: a test failure"
+            else:
+                r.update(dt=repr(1e-5), dt_min=repr(9e-6), dt_max=repr(1.7e-5), steps="252",
+                         energy_error_max="0.1", critical_dt=repr(est))
+                if status != "ok":
+                    r.update({"reason": "inverted element (det F = -0.1)",
+                              "diverged.time": "0.0002"})
+            w.writerow(r)
 
 
 # (b): a sweep written from docs/sweeps.md alone: two schemes on the oblique plate, each measured
@@ -367,6 +478,9 @@ class ReportSmoke(unittest.TestCase):
         cls.ver = os.path.join(t, "other", "ver")
         cls.kk = os.path.join(t, "sweeps", "kim_kwak")  # next to the paper sweep: discovered
         cls.kk_fields = os.path.join(t, "other", "rubber_groove")
+        cls.env = os.path.join(t, "sweeps", "envelope")   # next to the paper sweep: discovered
+        cls.long = os.path.join(t, "other", "long")       # given with --long-runs
+        write_envelope(cls.env)
         # the Kim–Kwak-type sweep in the background; a failed gate (exit 4) must still report
         kk_cmd = [BINARY, "sweep", KK_SWEEP, "--out", cls.kk, "--check", KK_GATES, "--quiet"]
         kk = subprocess.Popen(kk_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -377,6 +491,18 @@ class ReportSmoke(unittest.TestCase):
              "--quiet"])
         run([BINARY, "sweep", os.path.join(t, "verification.toml"), "--out", cls.ver, "--jobs",
              "2", "--quiet"])
+        with open(os.path.join(t, "long.toml"), "w") as f:
+            f.write(LONG_SWEEP)
+        run([BINARY, "sweep", os.path.join(t, "long.toml"), "--out", cls.long, "--jobs", "2",
+             "--quiet"])
+        with open(os.path.join(cls.long, "summary.csv"), newline="") as f:
+            cols = next(csv.reader(f))
+        with open(os.path.join(cls.long, "summary.csv"), "a", newline="") as f:
+            csv.DictWriter(f, fieldnames=cols, lineterminator="\n").writerow(
+                {"run_id": LONG_FAILED, "group": "ball_bouncing", "kind": "run",
+                 "status": "failed", "reason": "exit 2: a test failure",
+                 "scheme": "semi_explicit"})
+        run([PY, LONG_RUNS_PY, cls.long])
         coarse = ["--set", "meshes.M1.nx=4", "--set", "meshes.M1.ny=8"]
         run([BINARY, "stability", BASE, *coarse, "--end", "1e-3", "--max-runs", "8",
              "--out", os.path.join(cls.stab, "semi_explicit_M1"), "--quiet"], ok=(0, 4, 5))
@@ -394,7 +520,7 @@ class ReportSmoke(unittest.TestCase):
         cls.out_full = os.path.join(t, "full_report")
         run([BINARY, "report", cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
              "--verification", cls.ver, "--kim-kwak-fields", cls.kk_fields,
-             "--out", cls.out_full])
+             "--long-runs", cls.long, "--out", cls.out_full])
 
     @classmethod
     def tearDownClass(cls):
@@ -432,7 +558,7 @@ class ReportSmoke(unittest.TestCase):
     def test_bare_report_says_what_is_missing(self):
         man, page = self.check_files(self.out_bare)
         by_id = {s["id"]: s for s in man["sections"]}
-        missing = ("work_precision", "stability", "verification") + KK_IDS
+        missing = ("work_precision", "stability", "verification") + KK_IDS + ENV_IDS + LONG_IDS
         for sid in missing:
             self.assertFalse(by_id[sid]["available"], sid)
             sec = section_html(page, sid)
@@ -445,6 +571,14 @@ class ReportSmoke(unittest.TestCase):
         self.assertIn("cases/kim_kwak/rubber_groove.toml", section_html(page, "kk_shapes"))
         for sid in ("kk_histories", "kk_interfaces", "kk_runs"):
             self.assertIn("cases/kim_kwak/sweep.toml", section_html(page, sid))
+        for sid in ENV_IDS:
+            self.assertIn("cases/envelope/envelope.toml", section_html(page, sid))
+            self.assertIn("--envelope", section_html(page, sid))
+        for sid in LONG_IDS:
+            self.assertIn("cases/long_runs/sweep.toml", section_html(page, sid))
+            self.assertIn("reports/long_runs.py", section_html(page, sid))
+        self.assertIsNone(man["envelope"])
+        self.assertIsNone(man["long_runs"])
         self.assertFalse([s for s in by_id if s.startswith("ver_")])
         for sid, s in by_id.items():
             if sid not in missing:
@@ -475,7 +609,7 @@ class ReportSmoke(unittest.TestCase):
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
                     "stability", "penetration", "failed", "runs", "histories",
                     "scheme_limits"} | wp_ids \
-            | ver_ids | set(KK_IDS)
+            | ver_ids | set(KK_IDS) | set(ENV_IDS) | set(LONG_IDS)
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
         for sid, s in by_id.items():
@@ -501,7 +635,8 @@ class ReportSmoke(unittest.TestCase):
                           *((f"ver_{c}", f"verification_{c}") for c in VER_CASES),
                           ("kk_shapes", "kim_kwak_shapes"),
                           ("kk_histories", "kim_kwak_histories"),
-                          ("kk_interfaces", "kim_kwak_interfaces")):
+                          ("kk_interfaces", "kim_kwak_interfaces"),
+                          ("long_runs", "long_runs_residual")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -652,6 +787,133 @@ class ReportSmoke(unittest.TestCase):
         none = RK.sections({"out": out, "kk": None, "kk_fields": self.kk}, make_report.Section)
         self.assertFalse(none[0].available)
         self.assertIn("no fields/*.vtu", none[0].missing)
+
+    def test_envelope_and_long_runs(self):
+        """The envelope (discovered next to the paper sweep) and the long runs (--long-runs):
+        the unsafe-points table lists exactly the searches below 0.9 x the estimate or without a
+        stable step, the remedy runs beside their search, the counts; the long-run table one row
+        per drift.csv row, the failed one marked; the figures written."""
+        man = self.manifest(self.out_full)
+        self.assertEqual(man["envelope"], os.path.abspath(self.env))
+        self.assertEqual(man["long_runs"], os.path.abspath(self.long))
+        by_id = {s["id"]: s for s in man["sections"]}
+        self.assertEqual(by_id["envelope"]["files"],
+                         ["stability_envelope.png", "stability_envelope.svg"])
+        with open(os.path.join(self.out_full, "index.html")) as f:
+            page = f.read()
+        p = Tables()
+        p.feed(page)
+        short = lambda rid: rid.split("-")[0]  # noqa: E731  <group>/<index>
+        unsafe = [r for r in ENV_ROWS if r[7]]
+        rows = p.tables["tab-envelope_unsafe"]
+        self.assertEqual([r[0] for r in rows], [short(r[0]) for r in unsafe])
+        for row, r in zip(rows, unsafe):
+            self.assertEqual(row[1], r[3].replace("_", " ").replace("semi explicit",
+                                                                     "semi-explicit"))
+            if r[6] is None:    # no stable step at all
+                self.assertEqual((row[3], row[4]), ("no stable Δt", "–"))
+            else:
+                self.assertAlmostEqual(float(row[3]), r[6], places=2)
+                self.assertAlmostEqual(float(row[4]), r[6] / 0.9, places=2)   # the margin
+        self.assertIn("v = 50 m/s, μ = 0.5, St Venant–Kirchhoff", rows[0][2])
+        self.assertIn("neo-Hookean", rows[3][2])
+        self.assertIn("contact level velocity", rows[4][2])
+        self.assertIn("run_limit", rows[2][5])
+        self.assertIn("inverted element", rows[0][6])
+        # the remedy runs: status, the search at the same point (or none)
+        remedy = p.tables["tab-envelope_remedy"]
+        self.assertEqual([r[0] for r in remedy], ["remedy_neo_hookean/000",
+                                                  "remedy_neo_hookean/001"])
+        self.assertEqual(remedy[0][3], "ok")
+        self.assertTrue(remedy[1][3].startswith("diverged at t = 2e-4 s: inverted element"))
+        self.assertEqual(remedy[0][-1], "0.699 (neo_hookean/000)")
+        self.assertEqual(remedy[1][-1], "no search at this point")
+        # counts: the failed search left out, the others per group and scheme
+        searches = [r for r in ENV_ROWS if r[1] == "stability" and r[2] == "ok"]
+        safe = [r for r in searches if not r[7]]
+        cap = section_html(page, "envelope")
+        self.assertIn(f"{len(searches)} searches: {len(safe)} leave the automatic step stable, "
+                      f"{len(unsafe)} do not", cap)
+        self.assertIn("speed_friction/006-scheme=explicit_penalty_v5_mu0.1", cap)  # failed, named
+        counts = {(r[0], r[1]): r for r in p.tables["tab-envelope_counts"]}
+        self.assertEqual(counts[("speed_friction", "semi-explicit")][2:5], ["3", "1", "2"])
+        self.assertEqual(counts[("speed_friction", "implicit")][2:7], ["2", "2", "0", "0", "1"])
+        # the long runs: every row of drift.csv, the failed one without values
+        drift = read_csv(os.path.join(self.long, "drift.csv"))
+        self.assertEqual(len(drift), 5)
+        lrows = p.tables["tab-long_runs_table"]
+        self.assertEqual([r[0] for r in lrows], [short(d["run_id"]) for d in drift])
+        hdr = p.headers["tab-long_runs_table"]
+        col = {h: k for k, h in enumerate(hdr)}
+        for row, d in zip(lrows, drift):
+            if d["status"] == "ok":
+                self.assertEqual(float(row[col["drift of R / E_ref per 1e5 steps"]]),
+                                 float(f"{float(d['energy_drift_per_1e5_steps']):.2g}"))
+                self.assertEqual(row[col["steps"]], d["steps"])
+            else:
+                self.assertEqual(row[col["status"]], "failed")
+                self.assertEqual(row[col["steps"]], "–")
+        sliding = [r for r in lrows if r[0].startswith("block_sliding")]
+        self.assertTrue(all("slide_distance" in r[-1] for r in sliding), sliding)
+        ok_ids = [d["run_id"] for d in drift if d["status"] == "ok"]
+        self.assertEqual(by_id["long_runs"]["runs"], ok_ids)
+        self.assertIn(f"Not drawn: {LONG_FAILED} (failed)", section_html(page, "long_runs")
+                      .replace("<code>", "").replace("</code>", ""))
+
+    def test_envelope_and_long_runs_partial(self):
+        """Missing or partial sources: the sections say what is missing and how to produce it;
+        a long-run sweep without drift.csv still draws its residuals; an envelope whose only
+        search failed has nothing to draw. And a report of either sweep alone shows them."""
+        import make_report
+        import report_stability as RS
+        from report_io import Sweep
+        out = os.path.join(self.tmp, "stab_partial")
+        os.makedirs(out, exist_ok=True)
+        none = RS.sections({"out": out, "env": None, "long": None}, make_report.Section)
+        self.assertEqual([s.id for s in none], list(ENV_IDS + LONG_IDS))
+        for s in none:
+            self.assertFalse(s.available, s.id)
+            self.assertIn("build/ricochet sweep", s.missing)
+        nodrift = os.path.join(self.tmp, "long_nodrift")
+        os.makedirs(nodrift, exist_ok=True)
+        shutil.copy(os.path.join(self.long, "summary.csv"), nodrift)
+        os.symlink(os.path.join(self.long, "runs"), os.path.join(nodrift, "runs"))
+        fig, tab = RS.long_run_sections({"out": out, "long": Sweep(nodrift)}, make_report.Section)
+        self.assertTrue(fig.available, fig.missing)
+        self.assertGreater(os.path.getsize(os.path.join(out, fig.files[0])), 1000)
+        self.assertFalse(tab.available)
+        self.assertIn(f"reports/long_runs.py {nodrift}", tab.missing)
+        failed_only = os.path.join(self.tmp, "env_failed")
+        os.makedirs(failed_only, exist_ok=True)
+        with open(os.path.join(self.env, "summary.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        with open(os.path.join(failed_only, "summary.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+            w.writeheader()
+            w.writerows(r for r in rows if r["status"] == "failed")
+        env = RS.read_envelope(failed_only)
+        secs = RS.envelope_sections({"out": out, "env": env}, make_report.Section)
+        for s in secs:
+            self.assertFalse(s.available, s.id)
+            self.assertIn("no finished stability search", s.missing)
+        # a report of either sweep by itself gives its part: the envelope sweep is found as
+        # its own source (the figure is drawn by the full report already), the long-run sweep's
+        # report is written
+        import argparse
+        args = argparse.Namespace(accuracy=None, stability=None, verification=None,
+                                  kim_kwak=None, kim_kwak_fields=None, envelope=None,
+                                  long_runs=None, no_discover=False)
+        src = make_report.generic_sources(Sweep(self.env), args)
+        self.assertEqual(src[5:], (os.path.abspath(self.env), None))
+        src = make_report.generic_sources(Sweep(self.long), args)
+        self.assertEqual(src[5:], (None, os.path.abspath(self.long)))
+        rep = os.path.join(self.tmp, "alone_long")
+        run([PY, SCRIPT, self.long, "--out", rep, "--max-run-plots", "1"])
+        got = {s["id"]: s for s in self.manifest(rep)["sections"]}
+        for sid in LONG_IDS:
+            self.assertTrue(got[sid]["available"], sid)
+        self.assertNotIn("envelope", got)
+        check_images(self, rep)
 
     def test_markdown_table1(self):
         with open(os.path.join(self.out_full, "report.md")) as f:

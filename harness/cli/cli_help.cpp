@@ -61,9 +61,11 @@ const std::vector<Script>& scripts() {
         {"--verification", "VER_DIR", "verification sweep folder (cases/verification/sweep.toml)"},
         {"--kim-kwak", "KK_DIR", "Kim–Kwak-type sweep folder (cases/kim_kwak/sweep.toml)"},
         {"--kim-kwak-fields", "FIELDS_DIR", "run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu"},
+        {"--envelope", "ENV_DIR", "stability-envelope sweep folder (cases/envelope/envelope.toml)"},
+        {"--long-runs", "LONG_DIR", "long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv"},
         {"--out", "OUT", "report folder (default DIR/report)"},
         {"--max-run-plots", "N", "draw the histories of at most N runs (default 30)"},
-        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/ and rubber_groove/ next to DIR"},
+        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/ and long_runs/ next to DIR"},
         {"-h, --help", "", "the script's help"}}},
       {"plot", "plot_run.py",
        "one PNG of a run's history (docs/report.md): RUN_DIR/history.png; runs reports/plot_run.py "
