@@ -210,6 +210,7 @@ TEST(Mesh3, VolumesOfUnitCellsAndClosedForms) {
     if (A.determinant() < 0.0) A.col(0) *= -1.0;
     w.nodes = (A * w.nodes).colwise() + Vec3(1.5, -2.0, 0.25);
     const double expected = A.determinant() * (1.0 + d.sum() / 4.0);
+    // Measured at most 6.7e-16 (signed_volume) and 1.3e-15 (divergence theorem).
     EXPECT_NEAR(signed_volume(w, w.hexes[0]), expected, 1e-14) << trial;
     EXPECT_NEAR(divergence_volume(w, w.hexes[0]), expected, 1e-14) << trial;
   }
@@ -217,7 +218,7 @@ TEST(Mesh3, VolumesOfUnitCellsAndClosedForms) {
   for (int trial = 0; trial < 200; ++trial) {
     Mesh3 w = unit_cube();
     for (int k = 0; k < 24; ++k) w.nodes(k % 3, k / 3) += 0.5 * u(random);
-    EXPECT_NEAR(signed_volume(w, w.hexes[0]), divergence_volume(w, w.hexes[0]), 1e-14) << trial;
+    EXPECT_NEAR(signed_volume(w, w.hexes[0]), divergence_volume(w, w.hexes[0]), 1e-14) << trial;  // measured 8.9e-16
   }
 }
 
@@ -282,6 +283,16 @@ TEST(Mesh3, SharedFacesAreInteriorAndQuadrilateralsNeverMatchTriangles) {
   // square twice: once as the hexahedron's quadrilateral, once as two triangles.
   EXPECT_EQ(boundary_faces(mixed).size(), 5u + 10u + 1u + 2u);
   expect_faces_consistent(mixed);
+
+  // A tetrahedron on three corners of the cube's +x face (its three lowest nodes, 1 2 5 of
+  // the face 1 2 6 5) and a point beyond: the triangle matches no quadrilateral.
+  Mesh3 glued = unit_cube();
+  glued.nodes.conservativeResize(3, 9);
+  glued.nodes.col(8) = Vec3(1.5, 0.5, 0.5);
+  glued.tets = {{1, 2, 5, 8}};
+  ASSERT_GT(signed_volume(glued, glued.tets[0]), 0.0);
+  EXPECT_EQ(boundary_faces(glued).size(), 6u + 4u);
+  EXPECT_EQ(expect_faces_consistent(glued), 0u);
 }
 
 // ---------------------------------------------------------------- box
@@ -295,7 +306,7 @@ TEST(Mesh3Box, CountsVolumeAndPositiveCells) {
     EXPECT_EQ(m.hexes.size(), tets ? 0u : 24u);
     EXPECT_EQ(m.tets.size(), tets ? 144u : 0u);
     EXPECT_EQ(m.num_cells(), tets ? 144 : 24);
-    EXPECT_NEAR(checked_volume(m), 0.75, 1e-15);
+    EXPECT_NEAR(checked_volume(m), 0.75, 4e-15);  // measured 1.1e-16 (hexahedra), 5.6e-16 (tetrahedra)
     EXPECT_EQ(m.nodes.row(0).minCoeff(), 1.0);
     EXPECT_EQ(m.nodes.row(0).maxCoeff(), 3.0);
     EXPECT_EQ(m.nodes.row(1).minCoeff(), -2.0);
@@ -337,7 +348,7 @@ TEST(Mesh3Box, BoundaryFacesCoverTheSurfaceOutwards) {
       for (int k = 0; k < f.corners; ++k) EXPECT_EQ(m.nodes(axis, f.nodes[k]), plane);
     }
     EXPECT_LT(sum.norm(), 1e-15);
-    EXPECT_NEAR(area, 2 * (size.x() * size.y() + size.y() * size.z() + size.z() * size.x()), 1e-14);
+    EXPECT_NEAR(area, 2 * (size.x() * size.y() + size.y() * size.z() + size.z() * size.x()), 1e-14);  // measured 1.8e-15
     for (int s = 0; s < 6; ++s) {
       const int a = s / 2;
       EXPECT_NEAR(side_area[s], size((a + 1) % 3) * size((a + 2) % 3), 1e-15) << "side " << s;
@@ -427,7 +438,7 @@ TEST(Mesh3Extrude, ArcPlateVolumeIsAreaTimesThickness) {
     EXPECT_EQ(m.num_nodes(), plate.num_nodes() * (layers + 1));
     EXPECT_EQ(m.hexes.size(), plate.quads.size() * layers);
     EXPECT_EQ(m.tets.size(), 3 * plate.tris.size() * layers);
-    EXPECT_NEAR(checked_volume(m), area * thickness, 1e-14 * area * thickness);
+    EXPECT_NEAR(checked_volume(m), area * thickness, 1e-14 * area * thickness);  // measured 2.1e-16
     const std::vector<BoundaryFace> faces = boundary_faces(m);
     const std::size_t edges = boundary_edges(plate).size(), cells = static_cast<std::size_t>(plate.num_cells());
     EXPECT_EQ(faces.size(), triangles ? 2 * cells + 2 * layers * edges : 2 * cells + layers * edges);
@@ -438,8 +449,9 @@ TEST(Mesh3Extrude, ArcPlateVolumeIsAreaTimesThickness) {
       sum += face_area_vector(m, f);
       EXPECT_GT((face_centroid(m, f) - cell_centroid(m, f.cell)).dot(face_area_vector(m, f)), 0.0);
     }
-    EXPECT_NEAR(surface, 2 * area + perimeter * thickness, 1e-14);
-    EXPECT_LT(sum.norm(), 1e-15 * surface);
+    // Measured: 2e-16 and 3.5e-16 of the surface.
+    EXPECT_NEAR(surface, 2 * area + perimeter * thickness, 2e-15 * surface);
+    EXPECT_LT(sum.norm(), 4e-15 * surface);
     expect_faces_consistent(m);
   }
 }
