@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "harness/input/mesh_generators3.hpp"
 #include "harness/outputs/atomic_file.hpp"
 #include "harness/outputs/csv_writer.hpp"
 #include "harness/outputs/json_io.hpp"
@@ -702,6 +703,160 @@ TEST(PvdWriter, ExactOutputAndChecks) {
   EXPECT_NE(format_pvd({{2.5e-7 * 12345, "a.vtu"}}).find("timestep=\"0.00308625\""), std::string::npos);
   EXPECT_THROW(format_pvd({{nan_value, "a.vtu"}}), std::invalid_argument);
   EXPECT_THROW(format_pvd({{0.0, ""}}), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------- VTU of 3D meshes
+// The same writer on a VtuData3 (hexahedra and tetrahedra): the ascii document parsed back here,
+// and the binary encodings decoded by decode_vtu above, against the mesh's own arrays.
+
+// A box of nx x ny x nz hexahedra, followed by the 6 tetrahedra of each of its first
+// `tet_cells` cells (overlapping: the writer does not care), with every kind of array.
+VtuData3 box_data(int nx, int ny, int nz, int tet_cells) {
+  const Mesh3 hexes = make_box({.size = Vec3(0.3, 0.2, 0.1), .nx = nx, .ny = ny, .nz = nz, .origin = Vec3(-0.1, 0.05, 1.0 / 3.0)});
+  const Mesh3 tets = make_box({.size = Vec3(0.3, 0.2, 0.1), .nx = nx, .ny = ny, .nz = nz, .origin = Vec3(-0.1, 0.05, 1.0 / 3.0),
+                               .tetrahedra = true});
+  VtuData3 d;
+  d.points = hexes.nodes;
+  d.hexes = hexes.hexes;
+  d.tets.assign(tets.tets.begin(), tets.tets.begin() + 6 * tet_cells);
+  const Eigen::Index n = d.points.cols();
+  const std::size_t cells = d.hexes.size() + d.tets.size();
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::Matrix3Xd displacement(3, n), velocity(3, n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (int i = 0; i < 3; ++i) {
+      displacement(i, j) = 1e-3 * uniform(random);
+      velocity(i, j) = j < static_cast<Eigen::Index>(awkward.size()) && i == 2 ? awkward[j] : uniform(random);
+    }
+  std::vector<double> gap(n), vm(cells), stress(6 * cells);
+  std::vector<int> status(n), body(cells);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    gap[j] = uniform(random);
+    status[j] = static_cast<int>(j % 3);
+  }
+  for (std::size_t c = 0; c < cells; ++c) {
+    vm[c] = 1e6 * (1.0 + uniform(random));
+    body[c] = c < d.hexes.size() ? 0 : 1;
+    for (int k = 0; k < 6; ++k) stress[6 * c + k] = 1e5 * uniform(random);
+  }
+  d.time = 0.125;
+  d.point_vectors = {{"displacement", displacement}, {"velocity", velocity}};
+  d.point_scalars = {{"contact_gap", gap}};
+  d.point_ints = {{"contact_status", status}};
+  d.cell_scalars = {{"von_mises", vm}};
+  d.cell_tensors = {{"cauchy_stress", stress}};
+  d.cell_ints = {{"body", body}};
+  return d;
+}
+
+std::vector<double> flat(const Eigen::Matrix3Xd& m) { return {m.data(), m.data() + m.size()}; }
+
+std::vector<std::int32_t> connectivity_of(const VtuData3& d) {
+  std::vector<std::int32_t> c;
+  for (const auto& h : d.hexes) c.insert(c.end(), h.begin(), h.end());
+  for (const auto& t : d.tets) c.insert(c.end(), t.begin(), t.end());
+  return c;
+}
+
+TEST(VtuWriter3d, AsciiRoundTripOfCoordinatesAndConnectivity) {
+  const VtuData3 data = box_data(3, 2, 2, 2);
+  const std::string xml = format_vtu(data);
+  EXPECT_EQ(xml_error(xml), "");
+  EXPECT_NE(xml.find("<Piece NumberOfPoints=\"36\" NumberOfCells=\"24\">"), std::string::npos);  // 12 + 12
+  // Coordinates and vectors read back bit for bit, three per point.
+  expect_bits(ascii_values(decode_vtu(xml).at("Points").bytes), flat(data.points), "Points");
+  expect_bits(ascii_values(decode_vtu(xml).at("displacement").bytes), flat(data.point_vectors[0].second), "displacement");
+  expect_bits(ascii_values(decode_vtu(xml).at("velocity").bytes), flat(data.point_vectors[1].second), "velocity");
+  EXPECT_NE(xml.find("Name=\"velocity\" NumberOfComponents=\"3\""), std::string::npos);
+  // Connectivity one cell per line: 8 indices for a hexahedron, 4 for a tetrahedron.
+  const std::string text = decode_vtu(xml).at("connectivity").bytes;
+  std::istringstream lines(text.substr(text.find('\n') + 1));
+  std::vector<std::int32_t> connectivity;
+  std::size_t cell = 0;
+  // (The text ends with the indentation of </DataArray>, a line of blanks.)
+  for (std::string line; std::getline(lines, line) && line.find_first_not_of(' ') != std::string::npos; ++cell) {
+    std::istringstream in(line);
+    std::size_t count = 0;
+    for (std::int32_t v; in >> v; ++count) connectivity.push_back(v);
+    EXPECT_EQ(count, cell < data.hexes.size() ? 8u : 4u) << "cell " << cell;
+  }
+  EXPECT_EQ(cell, 24u);
+  EXPECT_EQ(connectivity, connectivity_of(data));
+  Tokens offsets, types;
+  for (std::size_t c = 0; c < 24; ++c) {
+    offsets.push_back(std::to_string(c < 12 ? 8 * (c + 1) : 96 + 4 * (c - 11)));
+    types.push_back(c < 12 ? "12" : "10");
+  }
+  EXPECT_EQ(array_values(xml, "offsets"), offsets);
+  EXPECT_EQ(array_values(xml, "types"), types);
+  EXPECT_EQ(array_values(xml, "body").size(), 24u);
+  EXPECT_EQ(array_values(xml, "cauchy_stress").size(), 6u * 24u);
+  EXPECT_EQ(array_values(xml, "contact_status").size(), 36u);
+  EXPECT_EQ(array_values(xml, "TimeValue"), Tokens{"0.125"});
+}
+
+TEST(VtuWriter3d, BinaryAndZlibEncodingsHoldTheAsciiArrays) {
+  const VtuData3 data = box_data(20, 20, 20, 40);  // 9261 points: 222 kB of coordinates
+  ASSERT_GT(flat(data.points).size() * 8, 3 * kVtuZlibBlock) << "several zlib blocks";
+  const std::map<std::string, DecodedArray> text = decode_vtu(format_vtu(data));
+  const std::vector<std::int32_t> connectivity = connectivity_of(data);
+  const std::size_t cells = data.hexes.size() + data.tets.size();
+  for (const VtuEncoding e : {VtuEncoding::binary, VtuEncoding::base64})
+    for (const VtuCompression z : {VtuCompression::none, VtuCompression::zlib}) {
+      SCOPED_TRACE(std::string(e == VtuEncoding::binary ? "binary" : "base64") + (z == VtuCompression::zlib ? "+zlib" : ""));
+      const std::string doc = format_vtu(data, {e, z});
+      const std::map<std::string, DecodedArray> a = decode_vtu(doc);
+      ASSERT_EQ(a.size(), text.size());
+      for (const auto& [name, array] : a) {
+        EXPECT_EQ(array.attributes.at("type"), text.at(name).attributes.at("type")) << name;
+        EXPECT_EQ(array.attributes.at("NumberOfComponents"), text.at(name).attributes.at("NumberOfComponents")) << name;
+      }
+      for (const char* name : {"Points", "displacement", "velocity", "contact_gap", "von_mises", "cauchy_stress"})
+        expect_bits(as<double>(a.at(name).bytes), ascii_values(text.at(name).bytes), name);
+      expect_bits(as<double>(a.at("Points").bytes), flat(data.points), "Points");
+      expect_bits(as<double>(a.at("velocity").bytes), flat(data.point_vectors[1].second), "velocity");
+      EXPECT_EQ(as<std::int32_t>(a.at("connectivity").bytes), connectivity);
+      EXPECT_EQ(as<std::int32_t>(a.at("contact_status").bytes), data.point_ints[0].second);
+      EXPECT_EQ(as<std::int32_t>(a.at("body").bytes), data.cell_ints[0].second);
+      const std::vector<std::int64_t> offsets = as<std::int64_t>(a.at("offsets").bytes);
+      const std::vector<std::uint8_t> types = as<std::uint8_t>(a.at("types").bytes);
+      ASSERT_EQ(offsets.size(), cells);
+      ASSERT_EQ(types.size(), cells);
+      for (std::size_t c = 0; c < cells; ++c) {
+        const bool hex = c < data.hexes.size();
+        EXPECT_EQ(offsets[c], hex ? 8 * static_cast<std::int64_t>(c + 1)
+                                  : 8 * static_cast<std::int64_t>(data.hexes.size()) + 4 * static_cast<std::int64_t>(c + 1 - data.hexes.size()));
+        EXPECT_EQ(types[c], hex ? 12 : 10);
+      }
+      EXPECT_EQ(offsets.back(), static_cast<std::int64_t>(connectivity.size()));
+    }
+}
+
+TEST(VtuWriter3d, SizeMismatchesAndBadIndicesThrow) {
+  const auto message = [](auto change) -> std::string {
+    VtuData3 data = box_data(2, 1, 1, 1);
+    change(data);
+    try {
+      format_vtu(data);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  EXPECT_EQ(message([](VtuData3&) {}), "no exception");
+  EXPECT_EQ(message([](VtuData3& d) { d.hexes[1][7] = 12; }),
+            "format_vtu: hexahedron 1 refers to point 12 but there are 12 points");
+  EXPECT_EQ(message([](VtuData3& d) { d.tets[5][0] = -1; }),
+            "format_vtu: tetrahedron 5 refers to point -1 but there are 12 points");
+  EXPECT_EQ(message([](VtuData3& d) { d.point_vectors[0].second.conservativeResize(3, 11); }),
+            "format_vtu: PointData array 'displacement' has 11 entries, expected 12");
+  EXPECT_EQ(message([](VtuData3& d) { d.tets.pop_back(); }),  // cell arrays now one too long
+            "format_vtu: CellData array 'von_mises' has 8 entries, expected 7");
+  EXPECT_EQ(message([](VtuData3& d) { d.cell_tensors[0].second.pop_back(); }),
+            "format_vtu: CellData array 'cauchy_stress' has 47 entries, expected 48");
+  EXPECT_EQ(message([](VtuData3& d) { d.time = inf_value; }), "format_vtu: time is not finite");
+  EXPECT_THROW(format_vtu(box_data(1, 1, 1, 0), {VtuEncoding::ascii, VtuCompression::zlib}), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------- atomic file

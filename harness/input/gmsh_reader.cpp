@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <span>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -123,17 +124,17 @@ struct RawNode {
   int line;
 };
 
-// An element of type 15, 1, 2 or 3. `group` is its physical tag in 2.2 (0 = none) or its
-// entity tag in 4.1.
+// An element of type 15, 1, 2, 3 (and in 3D 4 or 5). `group` is its physical tag in 2.2 (0 =
+// none) or its entity tag in 4.1.
 struct RawElement {
   long long tag;
   int type, dim, line;
   std::size_t count;  // nodes used in `nodes`
   long long group;
-  std::array<long long, 4> nodes;
+  std::array<long long, 8> nodes;
 };
 
-// Nodes per supported element type, or 0 if the type is not supported.
+// Nodes per element type that a reader can take (15, 1, 2, 3, 4, 5), or 0 for any other type.
 std::size_t nodes_of_type(long long type) {
   switch (type) {
     case 15:
@@ -143,15 +144,34 @@ std::size_t nodes_of_type(long long type) {
     case 2:
       return 3;
     case 3:
+    case 4:
       return 4;
+    case 5:
+      return 8;
     default:
       return 0;
   }
 }
 
 int dim_of_type(long long type) {
-  return type == 15 ? 0 : type == 1 ? 1 : 2;
+  return type == 15 ? 0 : type == 1 ? 1 : type == 4 || type == 5 ? 3 : 2;
 }
+
+// What a reader takes: its cells' dimension, the element types it accepts (cells and node-set
+// elements), and the texts of its messages about them.
+struct Flavour {
+  int cell_dim;
+  std::set<long long> types;
+  const char* allowed;   // after "unsupported element type T (name); allowed: "
+  const char* no_cells;  // after "no cells: the mesh needs "
+};
+
+const Flavour kPlanar = {2, {15, 1, 2, 3},
+                         "2 (3-node triangle), 3 (4-node quadrangle), and 1/15 for node sets",
+                         "elements of type 2 (3-node triangle) or 3 (4-node quadrangle)"};
+const Flavour kSolid = {3, {15, 1, 2, 3, 4, 5},
+                       "4 (4-node tetrahedron), 5 (8-node hexahedron), and 1/2/3/15 for node sets",
+                       "elements of type 4 (4-node tetrahedron) or 5 (8-node hexahedron)"};
 
 std::string type_name(long long type) {
   static const std::map<long long, const char*> names = {
@@ -170,11 +190,13 @@ std::string type_name(long long type) {
   return it == names.end() ? "unknown" : it->second;
 }
 
+// Reads the sections of a .msh file (read()); then build_planar() or build_solid() makes the
+// mesh of its flavour's cells.
 class Reader {
  public:
-  explicit Reader(Lexer lexer) : lex_(std::move(lexer)) {}
+  Reader(Lexer lexer, const Flavour& flavour) : lex_(std::move(lexer)), flavour_(flavour) {}
 
-  Mesh read() {
+  void read() {
     read_format();
     std::set<std::string> seen;
     for (std::string_view t; lex_.next(t);) {
@@ -197,8 +219,10 @@ class Reader {
     }
     if (!seen.count("Nodes")) lex_.fail_file("no $Nodes section");
     if (!seen.count("Elements")) lex_.fail_file("no $Elements section");
-    return build();
   }
+
+  Mesh build_planar() const;
+  Mesh3 build_solid() const;
 
  private:
   void read_format() {
@@ -295,13 +319,10 @@ class Reader {
 
   // Checks an element type; returns its node count.
   std::size_t check_type(long long type, int line) const {
-    const std::size_t count = nodes_of_type(type);
-    if (count == 0)
-      lex_.fail(
-          line,
-          "unsupported element type " + std::to_string(type) + " (" + type_name(type) +
-              "); allowed: 2 (3-node triangle), 3 (4-node quadrangle), and 1/15 for node sets");
-    return count;
+    if (!flavour_.types.count(type))
+      lex_.fail(line, "unsupported element type " + std::to_string(type) + " (" + type_name(type) +
+                          "); allowed: " + flavour_.allowed);
+    return nodes_of_type(type);
   }
 
   void read_element_nodes(const std::string& s, RawElement& e) {
@@ -361,15 +382,19 @@ class Reader {
                                     " elements, its blocks hold " + std::to_string(read));
   }
 
-  Mesh build();
-  std::map<long long, int> number_nodes(const std::vector<const RawElement*>& cells,
-                                        Mesh& mesh) const;
+  std::vector<const RawElement*> cells() const;
+  static std::map<long long, int> node_index(const std::vector<const RawElement*>& cells);
+  void number_nodes(const std::map<long long, int>& index, Mesh& mesh) const;
   void add_cells(const std::vector<const RawElement*>& cells, const std::map<long long, int>& index,
                  Mesh& mesh) const;
-  void add_node_sets(const std::map<long long, int>& index, Mesh& mesh) const;
+  void add_cells(const std::vector<const RawElement*>& cells, const std::map<long long, int>& index,
+                 Mesh3& mesh) const;
+  template <class M>
+  void add_node_sets(const std::map<long long, int>& index, M& mesh) const;
   std::vector<long long> physical_tags(const RawElement& e) const;
 
   Lexer lex_;
+  const Flavour& flavour_;
   bool v4_ = false, have_entities_ = false;
   int elements_line_ = 0;
   std::map<std::pair<long long, long long>, std::string> names_;  // (dim, physical tag)
@@ -391,7 +416,9 @@ std::vector<long long> Reader::physical_tags(const RawElement& e) const {
   return {};
 }
 
-Mesh Reader::build() {
+// The cells (elements of the flavour's dimension) in element-tag order, each distinct (type,
+// node list) once; checks that every element's nodes exist and that there are cells.
+std::vector<const RawElement*> Reader::cells() const {
   for (const RawElement& e : elements_) {
     for (std::size_t k = 0; k < e.count; ++k) {
       if (!nodes_.count(e.nodes[k]))
@@ -402,36 +429,55 @@ Mesh Reader::build() {
   // Cells in element-tag order, each distinct (type, node list) once.
   std::vector<const RawElement*> cells;
   for (const RawElement& e : elements_)
-    if (e.dim == 2) cells.push_back(&e);
+    if (e.dim == flavour_.cell_dim) cells.push_back(&e);
   std::sort(cells.begin(), cells.end(),
             [](const RawElement* a, const RawElement* b) { return a->tag < b->tag; });
-  std::set<std::pair<int, std::array<long long, 4>>> distinct;
+  std::set<std::pair<int, std::array<long long, 8>>> distinct;
   std::erase_if(cells, [&](const RawElement* e) {
     return !distinct.insert({e->type, e->nodes}).second;
   });
-  if (cells.empty())
-    lex_.fail(elements_line_,
-              "no cells: the mesh needs elements of type 2 (3-node triangle) or 3 "
-              "(4-node quadrangle)");
+  if (cells.empty()) lex_.fail(elements_line_, std::string("no cells: the mesh needs ") + flavour_.no_cells);
+  return cells;
+}
 
+// The node index of each node tag used by `cells`: 0, 1, ... in increasing tag.
+std::map<long long, int> Reader::node_index(const std::vector<const RawElement*>& cells) {
+  std::map<long long, int> index;
+  for (const RawElement* e : cells)
+    for (std::size_t k = 0; k < e->count; ++k) index[e->nodes[k]] = 0;
+  int next = 0;
+  for (auto& [tag, i] : index) i = next++;
+  return index;
+}
+
+Mesh Reader::build_planar() const {
+  const std::vector<const RawElement*> cell_list = cells();
+  const std::map<long long, int> index = node_index(cell_list);
   Mesh mesh;
-  const std::map<long long, int> index = number_nodes(cells, mesh);
-  add_cells(cells, index, mesh);
+  number_nodes(index, mesh);
+  add_cells(cell_list, index, mesh);
   add_node_sets(index, mesh);
   return mesh;
 }
 
-// Fills mesh.nodes with the nodes of `cells` in node-tag order, checks they lie in z = 0 and
-// returns the node index of each used tag.
-std::map<long long, int> Reader::number_nodes(const std::vector<const RawElement*>& cells,
-                                              Mesh& mesh) const {
-  std::map<long long, int> index;
-  for (const RawElement* e : cells)
-    for (std::size_t k = 0; k < e->count; ++k) index[e->nodes[k]] = 0;
+Mesh3 Reader::build_solid() const {
+  const std::vector<const RawElement*> cell_list = cells();
+  const std::map<long long, int> index = node_index(cell_list);
+  Mesh3 mesh;
+  mesh.nodes.resize(3, static_cast<Eigen::Index>(index.size()));
+  for (const auto& [tag, i] : index) {
+    const RawNode& n = nodes_.at(tag);
+    mesh.nodes.col(i) = Vec3(n.x, n.y, n.z);
+  }
+  add_cells(cell_list, index, mesh);
+  add_node_sets(index, mesh);
+  return mesh;
+}
+
+// Fills mesh.nodes with the nodes of `index` (node-tag order) and checks they lie in z = 0.
+void Reader::number_nodes(const std::map<long long, int>& index, Mesh& mesh) const {
   mesh.nodes.resize(2, static_cast<Eigen::Index>(index.size()));
-  int next = 0;
-  for (auto& [tag, i] : index) {
-    i = next++;
+  for (const auto& [tag, i] : index) {
     const RawNode& n = nodes_.at(tag);
     mesh.nodes.col(i) = Vec2(n.x, n.y);
   }
@@ -445,7 +491,6 @@ std::map<long long, int> Reader::number_nodes(const std::vector<const RawElement
       lex_.fail(n.line, what.str());
     }
   }
-  return index;
 }
 
 // Appends `cells` to mesh.tris and mesh.quads, all counter-clockwise: either all of them are
@@ -487,8 +532,45 @@ void Reader::add_cells(const std::vector<const RawElement*>& cells,
   }
 }
 
+// Hexahedra and tetrahedra, each with positive volume in Gmsh's corner order (mesh3.hpp); a
+// cell of zero volume, negative volume (inverted: not flipped, as a solid mesh has no viewing
+// side to choose) or a folded hexahedron is an error.
+void Reader::add_cells(const std::vector<const RawElement*>& cells,
+                       const std::map<long long, int>& index, Mesh3& mesh) const {
+  static constexpr int hex_edges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                           {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  static constexpr int tet_edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+  for (const RawElement* e : cells) {
+    std::array<int, 8> c{};
+    for (std::size_t k = 0; k < e->count; ++k) c[k] = index.at(e->nodes[k]);
+    const bool hex = e->type == 5;
+    double longest = 0.0;
+    for (const auto& edge : hex ? std::span<const int[2]>(hex_edges) : std::span<const int[2]>(tet_edges))
+      longest = std::max(longest, (mesh.nodes.col(c[edge[1]]) - mesh.nodes.col(c[edge[0]])).norm());
+    const std::array<int, 4> tet = {c[0], c[1], c[2], c[3]};
+    const double volume = hex ? signed_volume(mesh, c) : signed_volume(mesh, tet);
+    const std::string element = "element " + std::to_string(e->tag);
+    if (!(std::abs(volume) > 1e-12 * longest * longest * longest))
+      lex_.fail(e->line, "degenerate " + element + " (zero volume)");
+    if (volume < 0.0) {
+      std::ostringstream what;
+      what << "inverted " << element << " (volume " << volume
+           << " < 0); allowed: cells of positive volume in Gmsh's corner order";
+      lex_.fail(e->line, what.str());
+    }
+    if (!hex) {
+      mesh.tets.push_back(tet);
+    } else if (hex_corner_quality(mesh, c) > 0.0) {
+      mesh.hexes.push_back(c);
+    } else {
+      lex_.fail(e->line, "degenerate " + element + " (a corner Jacobian is <= 0: folded hexahedron)");
+    }
+  }
+}
+
 // Node sets from the physical groups of all elements, restricted to the kept nodes.
-void Reader::add_node_sets(const std::map<long long, int>& index, Mesh& mesh) const {
+template <class M>
+void Reader::add_node_sets(const std::map<long long, int>& index, M& mesh) const {
   for (const RawElement& e : elements_) {
     for (const long long phys : physical_tags(e)) {
       const auto name = names_.find({e.dim, phys});
@@ -507,9 +589,8 @@ void Reader::add_node_sets(const std::map<long long, int>& index, Mesh& mesh) co
   }
 }
 
-}  // namespace
-
-Mesh read_gmsh(const std::filesystem::path& file) {
+// The text of a .msh file; InputError if it is not a readable regular file.
+std::string read_text(const std::filesystem::path& file) {
   const std::string name = file.string();
   std::error_code ec;
   // A device or a pipe (a case's `file = "/dev/zero"`) would be read without end: only a
@@ -520,11 +601,25 @@ Mesh read_gmsh(const std::filesystem::path& file) {
   if (!in) throw InputError(name + ": cannot open");
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(name + ": cannot read");
-  return parse_gmsh(std::move(text), name);
+  return text;
 }
 
+}  // namespace
+
+Mesh read_gmsh(const std::filesystem::path& file) { return parse_gmsh(read_text(file), file.string()); }
+
 Mesh parse_gmsh(std::string text, const std::string& name) {
-  return Reader(Lexer(name, std::move(text))).read();
+  Reader reader(Lexer(name, std::move(text)), kPlanar);
+  reader.read();
+  return reader.build_planar();
+}
+
+Mesh3 read_gmsh3(const std::filesystem::path& file) { return parse_gmsh3(read_text(file), file.string()); }
+
+Mesh3 parse_gmsh3(std::string text, const std::string& name) {
+  Reader reader(Lexer(name, std::move(text)), kSolid);
+  reader.read();
+  return reader.build_solid();
 }
 
 }  // namespace ricochet

@@ -1,10 +1,12 @@
-// Reader for 2D Gmsh meshes in the ASCII .msh formats 2.2 and 4.1.
+// Reader for Gmsh meshes in the ASCII .msh formats 2.2 and 4.1: 2D meshes (read_gmsh) and 3D ones
+// (read_gmsh3), through the same tokenizer and sections.
 #pragma once
 
 #include <filesystem>
 #include <string>
 
 #include "solver/model/mesh.hpp"
+#include "solver/model/mesh3.hpp"
 
 namespace ricochet {
 
@@ -23,5 +25,19 @@ namespace ricochet {
 Mesh read_gmsh(const std::filesystem::path& file);
 // The same for the TEXT of a .msh file; `name` stands for the file in messages.
 Mesh parse_gmsh(std::string text, const std::string& name);
+
+// Reads a 3D mesh of 4-node tetrahedra (Gmsh type 4) and 8-node hexahedra (type 5), in Gmsh's
+// corner order, which is VTK's (mesh3.hpp); coordinates are taken as metres.
+// - Nodes, cells and duplicates as read_gmsh: nodes renumbered in increasing tag, keeping only
+//   nodes used by a cell; cells by element tag, hexahedra then tetrahedra in Mesh3.
+// - Node sets: every physical group of points (15), lines (1), surfaces (2, 3) or volumes
+//   becomes a node set, named as in read_gmsh.
+// - Orientation: every cell must have positive volume; none is flipped.
+// Throws InputError "FILE:LINE: what is wrong" as read_gmsh does, for the same file errors, any
+// element type but 15, 1, 2, 3, 4, 5, cells of zero or negative volume, hexahedra with a corner
+// Jacobian <= 0 (hex_corner_quality), or no tetrahedra or hexahedra at all.
+Mesh3 read_gmsh3(const std::filesystem::path& file);
+// The same for the TEXT of a .msh file; `name` stands for the file in messages.
+Mesh3 parse_gmsh3(std::string text, const std::string& name);
 
 }  // namespace ricochet

@@ -5,31 +5,18 @@
 #include <limits>
 #include <numbers>
 #include <random>
-#include <sstream>
 #include <string>
 
+#include "harness/input/generator_checks.hpp"
 #include "harness/input/input_error.hpp"
 
 namespace ricochet {
 namespace {
 
-// Largest node count a generator builds; keeps indices in int and memory bounded.
-constexpr long long max_nodes = 100'000'000;
-
-[[noreturn]] void fail(const std::string& message) {
-  throw InputError(message);
-}
-
-std::string str(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
-
-void require_positive(const char* gen, const char* name, double v) {
-  if (!std::isfinite(v) || v <= 0.0)
-    fail(std::string(gen) + ": " + name + " must be finite and > 0 (got " + str(v) + ")");
-}
+using generator_checks::fail;
+using generator_checks::max_nodes;
+using generator_checks::require_positive;
+using generator_checks::str;
 
 void require_cells(const char* gen, int nx, int ny) {
   if (nx < 1) fail(std::string(gen) + ": nx must be >= 1 (got " + std::to_string(nx) + ")");

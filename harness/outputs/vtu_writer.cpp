@@ -31,6 +31,8 @@ namespace {
 static_assert(sizeof(int) == 4, "Int32 arrays are written from int");
 constexpr std::uint8_t vtk_triangle = 5;
 constexpr std::uint8_t vtk_quad = 9;
+constexpr std::uint8_t vtk_tetra = 10;
+constexpr std::uint8_t vtk_hexahedron = 12;
 
 [[noreturn]] void invalid(const std::string& what) {
   throw std::invalid_argument("format_vtu: " + what);
@@ -179,28 +181,6 @@ class ArrayWriter {
   std::string appended_;
 };
 
-// A 2 x n matrix as 3-component tuples (x y 0), one per line.
-void append_xy0(std::string& out, const Eigen::Matrix2Xd& m) {
-  for (Eigen::Index j = 0; j < m.cols(); ++j) {
-    append_number(out, m(0, j));
-    out += ' ';
-    append_number(out, m(1, j));
-    out += " 0\n";
-  }
-}
-
-// Point indices of each cell, one cell per line.
-template <std::size_t N>
-void append_cells(std::string& out, const std::vector<std::array<int, N>>& cells) {
-  for (const auto& cell : cells) {
-    for (std::size_t k = 0; k < N; ++k) {
-      if (k > 0) out += ' ';
-      append_int(out, cell[k]);
-    }
-    out += '\n';
-  }
-}
-
 // `components` values per line.
 template <typename T>
 void append_values(std::string& out, const std::vector<T>& values, std::size_t components = 1) {
@@ -214,14 +194,39 @@ void append_values(std::string& out, const std::vector<T>& values, std::size_t c
   }
 }
 
-// A 2 x n matrix as 3 n values x y 0.
-std::vector<double> xy0(const Eigen::Matrix2Xd& m) {
+// Points and point vectors as 3 n values x y z: a 2 x n matrix with z = 0, a 3 x n one as it is.
+std::vector<double> xyz(const Eigen::Matrix2Xd& m) {
   std::vector<double> v(3 * static_cast<std::size_t>(m.cols()), 0.0);
   for (Eigen::Index j = 0; j < m.cols(); ++j) {
     v[3 * j] = m(0, j);
     v[3 * j + 1] = m(1, j);
   }
   return v;
+}
+std::vector<double> xyz(const Eigen::Matrix3Xd& m) { return {m.data(), m.data() + m.size()}; }
+
+// The cells of one VTK type, in the order they are written.
+struct CellBlock {
+  std::vector<std::int32_t> nodes;  // `count` cells of `corners` point indices each
+  std::size_t count;
+  int corners;
+  std::uint8_t vtk_type;
+  const char* kind;  // the cell's name in messages
+};
+
+template <std::size_t N>
+CellBlock block_of(const std::vector<std::array<int, N>>& cells, std::uint8_t type, const char* kind) {
+  CellBlock b{{}, cells.size(), static_cast<int>(N), type, kind};
+  b.nodes.reserve(N * cells.size());
+  for (const auto& c : cells) b.nodes.insert(b.nodes.end(), c.begin(), c.end());
+  return b;
+}
+
+std::vector<CellBlock> cell_blocks(const VtuData& d) {
+  return {block_of(d.quads, vtk_quad, "quad"), block_of(d.tris, vtk_triangle, "triangle")};
+}
+std::vector<CellBlock> cell_blocks(const VtuData3& d) {
+  return {block_of(d.hexes, vtk_hexahedron, "hexahedron"), block_of(d.tets, vtk_tetra, "tetrahedron")};
 }
 
 // Checks the names (non-empty, no control characters, not already in `seen`, the names used so
@@ -240,30 +245,34 @@ void check_fields(const Fields& fields, const char* section, std::size_t expecte
   }
 }
 
-template <std::size_t N>
-void check_cells(const std::vector<std::array<int, N>>& cells, const char* kind, Eigen::Index n) {
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    for (const int p : cells[c]) {
+void check_cells(const CellBlock& b, Eigen::Index n) {
+  for (std::size_t c = 0; c < b.count; ++c) {
+    for (int k = 0; k < b.corners; ++k) {
+      const int p = b.nodes[c * static_cast<std::size_t>(b.corners) + static_cast<std::size_t>(k)];
       if (p < 0 || p >= n) {
-        invalid(std::string(kind) + ' ' + std::to_string(c) + " refers to point " +
+        invalid(std::string(b.kind) + ' ' + std::to_string(c) + " refers to point " +
                 std::to_string(p) + " but there are " + std::to_string(n) + " points");
       }
     }
   }
 }
 
-}  // namespace
-
-std::string format_vtu(const VtuData& data, const VtuFormat& format) {
+// The document of format_vtu for a VtuData or a VtuData3.
+template <class Data>
+std::string format_piece(const Data& data, const VtuFormat& format) {
   const Eigen::Index n = data.points.cols();
-  const std::size_t cells = data.quads.size() + data.tris.size();
+  const std::vector<CellBlock> blocks = cell_blocks(data);
+  std::size_t cells = 0, corners = 0;
+  for (const CellBlock& b : blocks) {
+    cells += b.count;
+    corners += b.count * static_cast<std::size_t>(b.corners);
+  }
   if (!std::isfinite(data.time)) invalid("time is not finite");
   if (format.encoding == VtuEncoding::ascii && format.compression != VtuCompression::none)
     invalid("compression needs the binary or base64 encoding");
-  check_cells(data.quads, "quad", n);
-  check_cells(data.tris, "triangle", n);
+  for (const CellBlock& b : blocks) check_cells(b, n);
   const auto points = static_cast<std::size_t>(n);
-  const auto columns = [](const Eigen::Matrix2Xd& m) { return m.cols(); };
+  const auto columns = [](const auto& m) { return m.cols(); };
   const auto entries = [](const auto& v) { return v.size(); };
   std::set<std::string_view> point_names, cell_names;
   check_fields(data.point_vectors, "PointData", points, columns, point_names);
@@ -303,10 +312,7 @@ std::string format_vtu(const VtuData& data, const VtuFormat& format) {
     arrays.add(out, type, name, 1, v.data(), v.size(), [&](std::string& o) { append_values(o, v); });
   };
   out += "      <PointData>\n";
-  for (const auto& [name, values] : data.point_vectors) {
-    const std::vector<double> v = xy0(values);
-    arrays.add(out, "Float64", name, 3, v.data(), v.size(), [&](std::string& o) { append_xy0(o, values); });
-  }
+  for (const auto& [name, values] : data.point_vectors) doubles(name.c_str(), 3, xyz(values));
   for (const auto& [name, values] : data.point_scalars) doubles(name.c_str(), 1, values);
   for (const auto& [name, values] : data.point_ints) ints("Int32", name.c_str(), values);
   out += "      </PointData>\n      <CellData>\n";
@@ -314,28 +320,32 @@ std::string format_vtu(const VtuData& data, const VtuFormat& format) {
   for (const auto& [name, values] : data.cell_tensors) doubles(name.c_str(), 6, values);
   for (const auto& [name, values] : data.cell_ints) ints("Int32", name.c_str(), values);
   out += "      </CellData>\n      <Points>\n";
-  {
-    const std::vector<double> v = xy0(data.points);
-    arrays.add(out, "Float64", "Points", 3, v.data(), v.size(), [&](std::string& o) { append_xy0(o, data.points); });
-  }
+  doubles("Points", 3, xyz(data.points));
   out += "      </Points>\n      <Cells>\n";
 
+  // Connectivity (ascii: one cell per line), the end of each cell, its VTK type.
   std::vector<std::int32_t> connectivity;
-  connectivity.reserve(4 * data.quads.size() + 3 * data.tris.size());
-  for (const auto& q : data.quads) connectivity.insert(connectivity.end(), q.begin(), q.end());
-  for (const auto& t : data.tris) connectivity.insert(connectivity.end(), t.begin(), t.end());
-  arrays.add(out, "Int32", "connectivity", 1, connectivity.data(), connectivity.size(), [&](std::string& o) {
-    append_cells(o, data.quads);
-    append_cells(o, data.tris);
-  });
-  std::vector<std::int64_t> offsets(cells);
-  std::vector<std::uint8_t> types(cells);
-  std::int64_t offset = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    offset += c < data.quads.size() ? 4 : 3;
-    offsets[c] = offset;
-    types[c] = c < data.quads.size() ? vtk_quad : vtk_triangle;
+  std::vector<std::int64_t> offsets;
+  std::vector<std::uint8_t> types;
+  connectivity.reserve(corners);
+  offsets.reserve(cells);
+  types.reserve(cells);
+  for (const CellBlock& b : blocks) {
+    connectivity.insert(connectivity.end(), b.nodes.begin(), b.nodes.end());
+    for (std::size_t c = 0; c < b.count; ++c) {
+      offsets.push_back((offsets.empty() ? 0 : offsets.back()) + b.corners);
+      types.push_back(b.vtk_type);
+    }
   }
+  arrays.add(out, "Int32", "connectivity", 1, connectivity.data(), connectivity.size(), [&](std::string& o) {
+    std::size_t at = 0;
+    for (const CellBlock& b : blocks)
+      for (std::size_t c = 0; c < b.count; ++c)
+        for (int k = 0; k < b.corners; ++k) {
+          append_int(o, connectivity[at++]);
+          o += k + 1 < b.corners ? ' ' : '\n';
+        }
+  });
   ints("Int64", "offsets", offsets);
   ints("UInt8", "types", types);
   out += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
@@ -343,6 +353,12 @@ std::string format_vtu(const VtuData& data, const VtuFormat& format) {
   out += "</VTKFile>\n";
   return out;
 }
+
+}  // namespace
+
+std::string format_vtu(const VtuData& data, const VtuFormat& format) { return format_piece(data, format); }
+
+std::string format_vtu(const VtuData3& data, const VtuFormat& format) { return format_piece(data, format); }
 
 std::string format_pvd(const std::vector<std::pair<double, std::string>>& time_and_relative_file) {
   std::string out =

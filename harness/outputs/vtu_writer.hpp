@@ -1,5 +1,6 @@
 // Field output for ParaView and meshio: one VTK XML UnstructuredGrid file (.vtu) per output
-// time and a ParaView collection (.pvd) that lists them as a time series.
+// time and a ParaView collection (.pvd) that lists them as a time series. 2D meshes (VtuData)
+// and 3D ones (VtuData3) are written by the same code in the same layout and encodings.
 #pragma once
 
 #include <array>
@@ -27,6 +28,21 @@ struct VtuData {
   std::vector<std::pair<std::string, std::vector<int>>> cell_ints;  // Int32 per cell (body id)
 };
 
+// One snapshot of a 3D mesh and its fields: VtuData with 3D points and cells. The members and
+// their checks are VtuData's; vectors have three components of their own.
+struct VtuData3 {
+  Eigen::Matrix3Xd points;                       // 3 x n coordinates [m]
+  std::vector<std::array<int, 8>> hexes;         // VTK_HEXAHEDRON (12), corner order of mesh3.hpp
+  std::vector<std::array<int, 4>> tets;          // VTK_TETRA (10); cells are hexes, then tets
+  double time = 0.0;                             // [s], FieldData "TimeValue"
+  std::vector<std::pair<std::string, Eigen::Matrix3Xd>> point_vectors;  // 3 x n
+  std::vector<std::pair<std::string, std::vector<double>>> point_scalars;  // n values
+  std::vector<std::pair<std::string, std::vector<int>>> point_ints;  // Int32, n values
+  std::vector<std::pair<std::string, std::vector<double>>> cell_scalars;  // one per cell, in order
+  std::vector<std::pair<std::string, std::vector<double>>> cell_tensors;  // 6 per cell, VTK order
+  std::vector<std::pair<std::string, std::vector<int>>> cell_ints;  // Int32 per cell
+};
+
 // How the DataArrays of the Piece are stored (docs/outputs.md; the case keys
 // output.field_format and output.field_compression, docs/case-format.md).
 enum class VtuEncoding {
@@ -45,7 +61,7 @@ inline constexpr std::size_t kVtuZlibBlock = 32768;
 // The .vtu document (one Piece), in this layout, which VTK's XML reader and meshio's vtu reader
 // both accept:
 //   FieldData:  TimeValue (Float64, always format="ascii": one number, shortest round-trip text)
-//   Piece:      NumberOfPoints = n, NumberOfCells = quads + tris
+//   Piece:      NumberOfPoints = n, NumberOfCells = quads + tris (3D: hexes + tets)
 //     PointData: point_vectors (Float64, 3 components), point_scalars (Float64), point_ints (Int32)
 //     CellData:  cell_scalars (Float64), cell_tensors (Float64, 6 components), cell_ints (Int32)
 //     Points:    Float64, 3 components
@@ -71,6 +87,9 @@ inline constexpr std::size_t kVtuZlibBlock = 32768;
 // a cell array not one entry (tensors: 6) per cell; if a cell refers to a point outside [0, n);
 // if `time` is not finite; or if `format` asks for zlib with ascii.
 std::string format_vtu(const VtuData& data, const VtuFormat& format = {});
+// The same document for a 3D mesh: points and point vectors as written, cells VTK_HEXAHEDRON
+// (12, 8 corners) then VTK_TETRA (10, 4 corners), with the same checks.
+std::string format_vtu(const VtuData3& data, const VtuFormat& format = {});
 
 // The .pvd collection: one <DataSet timestep="t" group="" part="0" file="f"/> per entry, in the
 // given order. File names are written as given (ParaView resolves them relative to the .pvd).
