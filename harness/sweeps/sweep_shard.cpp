@@ -443,7 +443,13 @@ MergeOutcome merge_sweep(const SweepSpec& spec, const std::vector<SweepRun>& run
   if (n_shards) {
     std::map<int, std::size_t> per_shard;
     for (const MissingRun& m : outcome.missing) ++per_shard[m.shard];
+    std::size_t shards_listed = 0;
     for (const auto& [k, count] : per_shard) {
+      if (shards_listed++ == kListed) {
+        log << who << ": ... and " << per_shard.size() - kListed << " more shards with runs missing (sweep.json: merge.missing)"
+            << std::endl;
+        break;
+      }
       const SweepShard s{k, n_shards};
       const auto it = manifests.find(s.name());
       std::string state;
