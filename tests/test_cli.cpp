@@ -526,7 +526,7 @@ TEST_F(CliTest, RelaxationIsReported) {
 TEST_F(CliTest, EveryCommandAnswersHelp) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> commands = {
       {"run", {"--set", "--threads", "--out", "--quiet"}},
-      {"sweep", {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet"}},
+      {"sweep", {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet", "--shard", "--merge"}},
       {"check", {"--junit"}},
       {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
       {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},
@@ -590,6 +590,7 @@ std::vector<HelpOption> options_in(const std::string& help) {
 // A value that the option accepts, by the name of its value.
 std::string sample_value(const std::string& value, const fs::path& dir) {
   if (value == "N" || value == "K") return "2";
+  if (value == "K/N") return "1/2";
   if (value == "REL") return "0.01";
   if (value == "TIME") return "0.001";
   if (value == "E") return "0.1";

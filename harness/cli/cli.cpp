@@ -14,6 +14,7 @@
 #include "harness/outputs/run_outputs.hpp"
 #include "harness/stability/stability.hpp"
 #include "harness/sweeps/sweep.hpp"
+#include "harness/sweeps/sweep_shard.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -74,7 +75,8 @@ class CommandLine {
     run_->add_flag("-q,--quiet", run_cmd_.quiet, "no progress and no summary line");
 
     sweep_ = command("sweep", "run every case of a sweep file (docs/sweeps.md); writes DIR/summary.csv, DIR/sweep.json, DIR/runs/",
-                     "exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 2 bad input, 1 other error");
+                     "exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 3 with --merge: runs missing, "
+                     "2 bad input, 1 other error");
     sweep_->add_option("SWEEP.toml", sweep_cmd_.file, "the sweep file");
     sweep_out_ = sweep_->add_option("--out", out_dir_, "output folder (default: results/<sweep name>)")->type_name("DIR");
     jobs_ = sweep_->add_option("-j,--jobs", jobs_text_,
@@ -89,8 +91,15 @@ class CommandLine {
     sweep_->add_option("--check", sweep_cmd_.gates_file,
                        "then check the gates of GATES.toml on DIR/summary.csv (docs/gates.md); exit 4 if one fails")
         ->type_name("GATES.toml");
-    sweep_->add_flag("--force", sweep_cmd_.options.force, "rerun the runs that an earlier sweep finished");
+    force_ = sweep_->add_flag("--force", sweep_cmd_.options.force, "rerun the runs that an earlier sweep finished");
     sweep_->add_flag("-q,--quiet", sweep_cmd_.options.quiet, "no progress lines");
+    shard_ = sweep_->add_option("--shard", shard_text_,
+                                "run only shard K of N of the runs (1 <= K <= N) into DIR/runs/ and DIR/shards/K-of-N/; "
+                                "shards may run at the same time, on several hosts")
+                 ->type_name("K/N");
+    merge_ = sweep_->add_flag("--merge", sweep_cmd_.merge,
+                              "run nothing: build DIR/summary.csv and DIR/sweep.json from the shards' run folders; "
+                              "exit 3 if runs are missing");
 
     check_ = command("check", "check the gates of GATES.toml (docs/gates.md) on the sweep table SUMMARY.csv",
                      "exit status: 0 all gates pass, 4 a gate failed, 2 bad input, 1 other error");
@@ -160,6 +169,20 @@ class CommandLine {
       return run_command(run_cmd_);
     }
     if (&c == sweep_) {
+      if (merge_->count()) {
+        if (shard_->count())
+          throw InputError("ricochet sweep: --shard and --merge exclude each other: run each shard with --shard K/N, "
+                           "then merge once with --merge");
+        for (const CLI::Option* o : {jobs_, sweep_threads_, force_})
+          if (o->count())
+            throw InputError("ricochet sweep: --merge runs nothing: " + long_name(o) +
+                             " is for the shards (--shard K/N), not for the merge");
+      }
+      if (shard_->count()) {
+        sweep_cmd_.options.shard = parse_shard(shard_text_);
+        if (!sweep_cmd_.gates_file.empty())
+          throw InputError("ricochet sweep: --check checks the whole sweep's table: give it to --merge, not to a shard (--shard)");
+      }
       if (jobs_->count()) sweep_cmd_.options.jobs = static_cast<int>(parse_integer("sweep", "--jobs", jobs_text_, 1, kMaxSweepJobs));
       if (repeat_->count()) sweep_cmd_.options.repeat = static_cast<int>(parse_integer("sweep", "--repeat", repeat_text_, 1, 1000));
       if (sweep_threads_->count()) sweep_cmd_.options.threads = parse_threads("sweep", sweep_threads_text_);
@@ -255,7 +278,7 @@ class CommandLine {
                     ": a verification and benchmark harness for frictional impact simulation",
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
-  CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr;
+  CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr, *force_ = nullptr, *shard_ = nullptr, *merge_ = nullptr;
   CLI::Option *run_out_ = nullptr, *sweep_out_ = nullptr, *stability_out_ = nullptr;
   CLI::Option *run_threads_ = nullptr, *sweep_threads_ = nullptr, *stability_threads_ = nullptr;
   CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
@@ -264,6 +287,7 @@ class CommandLine {
   CheckCommand check_cmd_;
   StabilityCommand stability_cmd_;
   std::string out_dir_;  // sweep --out
+  std::string shard_text_;  // sweep --shard K/N
   std::string jobs_text_, repeat_text_, tolerance_text_, max_runs_text_, end_text_, energy_bound_text_;
   std::string run_threads_text_, sweep_threads_text_, stability_threads_text_;
 };

@@ -15,8 +15,8 @@ std::string number_text(double x) {
 
 }  // namespace
 
-SweepErrors::SweepErrors(const SweepPlan& plan, const std::vector<RunRecord>& records)
-    : plan_(plan), records_(records), columns_(plan.size()) {}
+SweepErrors::SweepErrors(const SweepPlan& plan, const std::vector<RunRecord>& records, bool measure)
+    : plan_(plan), records_(records), measure_(measure), columns_(plan.size()) {}
 
 const HistoryTable* SweepErrors::reference_history(std::size_t ref) {
   auto it = histories_.find(ref);
@@ -65,6 +65,7 @@ void SweepErrors::compute(std::size_t i) {
   const RunRecord& rr = records_[ref];
   c.push_back({"reference_run", run.reference_id});
   c.push_back({"reference_kind", run.reference_kind});
+  if (!measure_) return;
   if (rr.state == RunRecord::State::done && rr.summary) c.push_back({"reference_dt", json_text(*rr.summary, "dt")});
   if (!records_[i].summary) return;
   std::optional<HistoryTable> own, theirs;

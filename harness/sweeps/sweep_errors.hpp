@@ -21,7 +21,9 @@ class SweepErrors {
  public:
   using Columns = std::vector<std::pair<std::string, std::string>>;  // column -> value
 
-  SweepErrors(const SweepPlan& plan, const std::vector<RunRecord>& records);
+  // `measure` false: no errors are measured (a shard's own table, whose references may be
+  // another shard's runs; the merge measures them), only reference_run and reference_kind.
+  SweepErrors(const SweepPlan& plan, const std::vector<RunRecord>& records, bool measure = true);
 
   // Run i's error columns: reference_run, reference_kind, reference_dt (once the reference is
   // done), error_<metric> for each metric with a value, impulse_source, and for runs compared
@@ -43,6 +45,7 @@ class SweepErrors {
 
   const SweepPlan& plan_;
   const std::vector<RunRecord>& records_;
+  bool measure_ = true;
   std::vector<std::optional<Columns>> columns_;    // by run index
   std::map<std::size_t, HistoryTable> histories_;  // reference histories, by run index
   std::optional<ReferenceMetrics> floor_;          // the shared reference's check against it

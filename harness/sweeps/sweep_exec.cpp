@@ -28,6 +28,7 @@
 #include <utility>
 
 #include "harness/outputs/atomic_file.hpp"
+#include "harness/outputs/run_outputs.hpp"
 #include "harness/sweeps/sweep.hpp"
 
 namespace ricochet {
@@ -349,6 +350,29 @@ void RunFolderLock::clear_folder() const {
     if (e.path().filename() != "run.lock") fs::remove_all(e.path());
 }
 
+void write_failure(const fs::path& folder, const std::string& run_id, const std::string& reason) {
+  Json j = Json::object();
+  j["run_id"] = run_id;
+  j["status"] = "failed";
+  j["reason"] = reason;
+  j["written_at"] = utc_now();
+  write_file_atomic(folder / "failure.json", dump_json(j));
+}
+
+std::optional<std::string> read_failure(const fs::path& folder, const std::string& run_id) {
+  const fs::path p = folder / "failure.json";
+  if (!fs::is_regular_file(p)) return std::nullopt;
+  try {
+    const Json j = read_json_file(p);
+    if (!j.is_object() || !j.contains("run_id") || j.at("run_id") != run_id || !j.contains("status") ||
+        j.at("status") != "failed" || !j.contains("reason") || !j.at("reason").is_string())
+      return std::nullopt;
+    return j.at("reason").get<std::string>();
+  } catch (const JsonParseError&) {
+    return std::nullopt;
+  }
+}
+
 struct SweepExecution::Task {
   std::size_t run;
   std::optional<RunFolderLock> lock;  // held from the run's start until it is done
@@ -367,6 +391,7 @@ SweepExecution::SweepExecution(const SweepPlan& plan, std::vector<RunRecord>& re
       program_(std::move(program)),
       log_(options.log ? options.log : &std::cerr),
       start_(start),
+      total_(plan.scope_size()),
       done_(done) {}
 
 void SweepExecution::start(Task& t) {
@@ -457,6 +482,7 @@ void SweepExecution::finish(Task& t, int wait_status) {
     rec.wall = t.walls;
     rec.cpu = t.cpus;
   }
+  if (rec.status == "failed") write_failure(plan_.folder(t.run), plan_.run(t.run).id, rec.reason);
   rec.state = RunRecord::State::done;
   ++done_;
   session_wall_ += t.wall;
@@ -467,11 +493,11 @@ void SweepExecution::progress(const Task& t) {
   if (options_.quiet) return;
   const RunRecord& rec = records_[t.run];
   const double elapsed = seconds(Clock::now() - start_);
-  const std::size_t left_runs = plan_.size() - done_;
+  const std::size_t left_runs = total_ - done_;
   const double left = session_wall_ / static_cast<double>(session_runs_) * static_cast<double>(left_runs) / options_.jobs;
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.2f s", t.wall);
-  *log_ << "[" << done_ << "/" << plan_.size() << "] " << plan_.run(t.run).id << " " << rec.status << " wall " << buf
+  *log_ << "[" << done_ << "/" << total_ << "] " << plan_.run(t.run).id << " " << rec.status << " wall " << buf
         << " | elapsed " << duration_text(elapsed) << ", left ~" << duration_text(left);
   if (!rec.reason.empty()) *log_ << " | " << rec.reason;
   *log_ << std::endl;

@@ -7,14 +7,16 @@
 // its folder's lock, RUN/run.lock, for its whole life (RunFolderLock). SIGINT, SIGTERM and
 // SIGHUP are passed on to the running runs' groups; the sweep waits up to 5 s for them to end
 // before it ends by the same signal. A finished run's record is filled from its summary.json
-// (a search's from its stability.json), or marked failed with the reason, and a progress line is
-// printed after each run.
+// (a search's from its stability.json), or marked failed with the reason (and that failure kept in
+// the run folder as failure.json, for a merge: sweep_shard.hpp), and a progress line is printed
+// after each run.
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -53,12 +55,23 @@ class RunFolderLock {
   int fd_ = -1;
 };
 
+// A failed run's record in its folder, FOLDER/failure.json: {"run_id", "status": "failed",
+// "reason", "written_at"}, written with a temporary file and a rename. A run folder holds
+// summary.json (finished), failure.json (failed) or neither (not finished); resume reruns a
+// failed run as before, and a merge reads the failure from it (read_failure).
+void write_failure(const std::filesystem::path& folder, const std::string& run_id, const std::string& reason);
+
+// The reason of a failed run from FOLDER/failure.json, if it is there, is a failure record of
+// run `run_id` and is valid (status "failed", a string reason); else nothing.
+std::optional<std::string> read_failure(const std::filesystem::path& folder, const std::string& run_id);
+
 class SweepExecution {
  public:
   using Clock = std::chrono::steady_clock;
 
   // `program`: the ricochet program to run; `start`: when the sweep started (for the elapsed
-  // time); `done`: the runs already done when it starts (resumed ones), for the progress lines.
+  // time); `done`: the runs already done when it starts (resumed ones), for the progress lines,
+  // which count the runs in the plan's scope (a shard's runs).
   SweepExecution(const SweepPlan& plan, std::vector<RunRecord>& records, const SweepOptions& options,
                  std::filesystem::path program, Clock::time_point start, std::size_t done);
 
@@ -68,7 +81,8 @@ class SweepExecution {
   // called from a thread that lives until it returns (the runs die with the thread that started
   // them); if it throws, the runs it started are killed and reaped first.
   // `on_done(i)` is called once run i is done, its record updated (state done; status, reason,
-  // summary and timings, or status failed), before its progress line.
+  // summary and timings, or status failed), before its progress line. A failed run's folder gets
+  // failure.json (write_failure) before its lock is released.
   void run(std::vector<std::size_t> queue, const std::function<void(std::size_t)>& on_done);
 
  private:
@@ -85,6 +99,7 @@ class SweepExecution {
   std::filesystem::path program_;
   std::ostream* log_;
   Clock::time_point start_;
+  std::size_t total_ = 0;  // runs in the plan's scope
   std::size_t done_ = 0, session_runs_ = 0;
   double session_wall_ = 0.0;  // process wall time of the runs executed so far [s]
 };

@@ -11,22 +11,22 @@
 #include "harness/sweeps/sweep.hpp"
 
 namespace ricochet {
-namespace {
-
 namespace fs = std::filesystem;
 
-std::string fnv1a(const std::string& s) {
+std::uint64_t fnv1a(std::string_view s) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : s) {
     h ^= c;
     h *= 1099511628211ull;
   }
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
+  return h;
 }
 
-}  // namespace
+std::string fnv1a_hex(std::string_view s) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a(s)));
+  return buf;
+}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -127,7 +127,7 @@ SweepPlan::SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, c
     : spec_(spec), runs_(runs), options_(options) {
   for (std::size_t i = 0; i < runs_.size(); ++i) index_[runs_[i].id] = i;
   for (const SweepRun& r : runs_)
-    if (!base_hash_.count(r.base)) base_hash_[r.base] = fnv1a(read_text(r.base));
+    if (!base_hash_.count(r.base)) base_hash_[r.base] = fnv1a_hex(read_text(r.base));
 }
 
 fs::path SweepPlan::folder(std::size_t i) const { return options_.out_dir / runs_[i].folder(); }
@@ -169,17 +169,32 @@ std::optional<int> SweepPlan::threads(std::size_t i) const {
   return 1;
 }
 
+std::size_t SweepPlan::scope_size() const {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < runs_.size(); ++i) n += in_scope(i);
+  return n;
+}
+
 std::vector<std::size_t> SweepPlan::queue(const std::vector<RunRecord>& records) const {
   std::vector<std::size_t> queue;
   for (int pass = 0; pass < 2; ++pass)
     for (std::size_t i = 0; i < runs_.size(); ++i)
-      if (records[i].state == RunRecord::State::pending && runs_[i].is_reference == (pass == 0)) queue.push_back(i);
+      if (in_scope(i) && records[i].state == RunRecord::State::pending && runs_[i].is_reference == (pass == 0))
+        queue.push_back(i);
   return queue;
 }
 
 bool SweepPlan::startable(std::size_t i, const std::vector<RunRecord>& records) const {
   const std::string& ref = runs_[i].reference_id;
-  return runs_[i].is_reference || ref.empty() || records[index_.at(ref)].state == RunRecord::State::done;
+  if (runs_[i].is_reference || ref.empty()) return true;
+  const std::size_t r = index_.at(ref);
+  return !in_scope(r) || records[r].state == RunRecord::State::done;
+}
+
+std::string SweepPlan::definition() const {
+  std::string all;
+  for (std::size_t i = 0; i < runs_.size(); ++i) all += request(i);
+  return fnv1a_hex(all);
 }
 
 bool SweepPlan::load_finished(std::size_t i, RunRecord& record, std::string& note) const {

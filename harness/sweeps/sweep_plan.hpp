@@ -5,11 +5,13 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "harness/outputs/json_io.hpp"
@@ -61,12 +63,27 @@ class SweepPlan {
   // cores).
   std::optional<int> threads(std::size_t i) const;
 
-  // The pending runs in the order they are started: reference runs first, so that runs compared
-  // with them find them finished.
+  // The runs this invocation may read, run and table: every run, or with set_scope only the
+  // runs of one shard (`ricochet sweep --shard K/N`). The runs outside it belong to other
+  // processes: their folders are neither read nor written.
+  void set_scope(std::vector<bool> in_scope) { scope_ = std::move(in_scope); }
+  bool in_scope(std::size_t i) const { return scope_.empty() || scope_[i]; }
+  std::size_t scope_size() const;
+
+  // The pending runs in scope in the order they are started: reference runs first, so that runs
+  // compared with them find them finished.
   std::vector<std::size_t> queue(const std::vector<RunRecord>& records) const;
-  // A run waits for its reference; a reference run (the shared reference's check run) does not:
-  // its errors are computed again when the reference finishes.
+  // A run waits for its reference when the reference is in scope; a reference run (the shared
+  // reference's check run) does not: its errors are computed again when the reference finishes.
+  // A reference outside the scope (another shard's) holds nothing back: a run does not need its
+  // reference to run, only its errors do, and the merge measures them (sweep_shard.hpp).
   bool startable(std::size_t i, const std::vector<RunRecord>& records) const;
+
+  // The sweep definition's fingerprint: FNV-1a (64 bits, 16 hex digits) of every run's request
+  // (above), in the sweep's order. Two invocations with the same fingerprint run the same runs
+  // with the same identities; it changes with the runs, their overrides, their base cases' text
+  // and --repeat, not with --jobs, --threads or the output folder.
+  std::string definition() const;
 
   // Whether run i was finished by an earlier invocation: its overrides.json matches the request
   // and every repeat left a readable, valid summary.json (summary_problem), or for a stability
@@ -82,6 +99,7 @@ class SweepPlan {
   const SweepOptions& options_;
   std::map<std::string, std::size_t> index_;
   std::map<std::filesystem::path, std::string> base_hash_;  // FNV-1a of each base case's text
+  std::vector<bool> scope_;                                  // empty: every run
 };
 
 // What is wrong with a run's summary.json for a sweep, in one line naming the key ("wall_seconds:
@@ -117,6 +135,10 @@ std::string json_text(const Json& summary, std::string_view key);
 // compared with a reference (and every reference run), its error probe. Throws InputError
 // "SWEEP:LINE: KEY: run ID: <the case's one-line error>".
 void check_runs(const SweepSpec& spec, const std::vector<SweepRun>& runs);
+
+// FNV-1a (64 bits) of a text, and as 16 hex digits.
+std::uint64_t fnv1a(std::string_view text);
+std::string fnv1a_hex(std::string_view text);
 
 // The whole text of a file; empty if it cannot be read.
 std::string read_text(const std::filesystem::path& path);

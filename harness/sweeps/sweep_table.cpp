@@ -177,8 +177,8 @@ void write_summary_csv(const fs::path& path, const std::vector<SummaryRow>& rows
   write_file_atomic(path, format_summary_csv(rows, layout));
 }
 
-SweepTable::SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& records)
-    : plan_(plan), records_(records), errors_(plan, records), rows_(plan.size()) {
+SweepTable::SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& records, bool measure_errors)
+    : plan_(plan), records_(records), errors_(plan, records, measure_errors), rows_(plan.size()) {
   const std::vector<SweepRun>& runs = plan.runs();
   std::set<std::string> seen;
   for (int pass = 0; pass < 2; ++pass)

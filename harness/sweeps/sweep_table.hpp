@@ -61,7 +61,9 @@ class SweepTable {
   // reference_run, reference_kind, reference_dt, impulse_source, with a check run
   // floor_<metric>, and with a stability group the search columns (stable_dt, unstable_dt,
   // estimate_dt, stable_over_estimate, outcome, converged, trials, unstable_reason).
-  SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& records);
+  // `measure_errors` false: the error columns stay empty but for reference_run and
+  // reference_kind (a shard's own table: SweepErrors).
+  SweepTable(const SweepPlan& plan, const std::vector<RunRecord>& records, bool measure_errors = true);
 
   // Run i is done: its row, and those of the runs compared with it, are built again.
   void run_done(std::size_t i);
