@@ -5,16 +5,17 @@
 
 namespace ricochet {
 
-BipotentialContact make_bipotential_contact(const Model& model, const std::vector<Obstacle>& obstacles,
-                                            const std::vector<std::vector<double>>& friction,
-                                            const std::vector<PrescribedDof>& prescribed,
-                                            const std::vector<BodyPair>& pairs) {
-  BipotentialContact b;
+template <class M>
+BipotentialContactT<M::kDim> make_bipotential_contact(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                                                      const std::vector<std::vector<double>>& friction,
+                                                      const std::vector<PrescribedDof>& prescribed,
+                                                      const std::vector<BodyPair>& pairs) {
+  BipotentialContactT<M::kDim> b;
   b.set = make_contact_set(model, obstacles, friction, prescribed, pairs);
   const std::size_t n = b.set.candidates.size();
   b.x_free.assign(n, {});
   b.weight.assign(n, 0.0);
-  b.node_reaction.assign(model.num_nodes(), Vec2::Zero());
+  b.node_reaction.assign(model.num_nodes(), VecD<M::kDim>::Zero());
   return b;
 }
 
@@ -23,35 +24,37 @@ namespace {
 // Gauss-Seidel sweeps over the active contacts; each contact sees the current reactions of
 // the other contacts on its node through x = x_free + w (r_own + r_others). Returns the sweeps
 // taken and sets `converged`.
-template <bool kFriction>
-int gauss_seidel(const ContactSettings& set, BipotentialContact& b, bool& converged_out) {
-  ContactSet& c = b.set;
+template <bool kFriction, int D>
+int gauss_seidel(const ContactSettings& set, BipotentialContactT<D>& b, bool& converged_out) {
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+  ContactSetT<D>& c = b.set;
   for (int sweep = 1; sweep <= set.max_sweeps; ++sweep) {
     bool converged = true;
     for (int k : c.active) {
       const ContactCandidate& cc = c.candidates[k];
-      const Stencil& st = c.stencil[k];
-      const Vec2 n = c.normal[k], t{n.y(), -n.x()};
+      const auto& st = c.stencil[k];
+      const ContactFrame<D> f(c.normal[k]);
       const double w = b.weight[k];
-      LocalPair& r = c.reaction[k];
-      const Vec2 own = r.n * n + r.t * t;
+      Local& r = c.reaction[k];
+      const Vec own = f.global(r);
       // x = x_free + sum_j coef_j w_j (reactions on node j other than this contact's own).
-      LocalPair xf = b.x_free[k];
+      Local xf = b.x_free[k];
       for (int j = 0; j < st.count; ++j) {
-        const Vec2 other = b.node_reaction[st.node[j]] - st.coef[j] * own;
-        xf.n += st.factor[j] * n.dot(other);
-        xf.t += st.factor[j] * t.dot(other);
+        const Local other = f.local(b.node_reaction[st.node[j]] - st.coef[j] * own);
+        xf.n += st.factor[j] * other.n;
+        xf.t += st.factor[j] * other.t;
       }
       const double rho = set.rho_factor / w;
-      LocalPair next;
+      Local next;
       if constexpr (kFriction) {
         next = bipotential_update(r, xf, w, cc.friction_coeff, rho);
       } else {
-        next = {std::max(0.0, r.n - rho * (xf.n + w * r.n)), 0.0};
+        next.n = std::max(0.0, r.n - rho * (xf.n + w * r.n));
       }
-      const double change = std::hypot(next.n - r.n, next.t - r.t);
-      if (change > set.tolerance * std::hypot(next.n, next.t)) converged = false;
-      const Vec2 delta = (next.n - r.n) * n + (next.t - r.t) * t;
+      const double change = local_distance(next, r);
+      if (change > set.tolerance * local_norm(next)) converged = false;
+      const Vec delta = f.global(Local{next.n - r.n, next.t - r.t});
       for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * delta;
       r = next;
     }
@@ -66,20 +69,25 @@ int gauss_seidel(const ContactSettings& set, BipotentialContact& b, bool& conver
 
 }  // namespace
 
-void add_reaction_accelerations(const Model& model, const BipotentialContact& b, State& s) {
-  const ContactSet& c = b.set;
+template <class M>
+void add_reaction_accelerations(const M& model, const BipotentialContactT<M::kDim>& b, State& s) {
+  constexpr int D = M::kDim;
+  const ContactSetT<D>& c = b.set;
   for (int k : c.active) {
-    const Stencil& st = c.stencil[k];
-    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-    const LocalPair r = c.reaction[k];
-    const Vec2 force = r.n * n + r.t * t;
-    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force / model.mass[2 * st.node[j]];
+    const auto& st = c.stencil[k];
+    const VecD<D> force = ContactFrame<D>(c.normal[k]).global(c.reaction[k]);
+    for (int j = 0; j < st.count; ++j)
+      s.a.segment<D>(D * st.node[j]) += st.coef[j] * force / model.mass[D * st.node[j]];
   }
 }
 
-void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const ContactSettings& set, BipotentialContact& b, State& s) {
-  ContactSet& c = b.set;
+template <class M>
+void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, const ContactSettings& set,
+                   BipotentialContactT<M::kDim>& b, State& s) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+  ContactSetT<D>& c = b.set;
   // dt = dt_{n+1/2} (t_n to t_n+1) and dt_n = (dt_{n-1/2} + dt_{n+1/2}) / 2, over which a_n acts
   // on the velocity (central_difference.hpp); both are dt for a fixed step. A reaction r on a
   // node of mass m moves v_{n+1/2} by dt_n r / m and x_{n+1} by dt dt_n r / m: the local
@@ -88,34 +96,34 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   const double dt = s.dt, dt_n = velocity_step(s);
   const bool position = set.level == ContactLevel::position;
   // Free motion to t+dt: v_{n+1/2} without contact and the predicted position.
-  auto v_free = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt_n * s.a.segment<2>(2 * j); };
-  auto predicted = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j) + dt * v_free(j); };
+  auto v_free = [&](int j) -> Vec { return s.v_half.segment<D>(D * j) + dt_n * s.a.segment<D>(D * j); };
+  auto predicted = [&](int j) -> Vec { return model.ref.col(j) + s.u.segment<D>(D * j) + dt * v_free(j); };
   update_boxes(c, predicted);
   begin_step(c);
   // Broad phase: only boundary nodes whose free motion ends behind an obstacle (or inside a
   // master body) at t+dt. Gap and frame at the predicted position, frozen for the step.
   for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
-    ObstacleContact oc;
+    typename Space<D>::ObstacleContact oc;
     if (!candidate_frame(model, obstacles, c, k, s.u, s.v_half, predicted, oc) || !(oc.gap < 0.0)) {
       c.reaction[k] = {};
       record(c, k, ContactStatus::open);
       continue;
     }
-    Stencil& st = c.stencil[k];
+    auto& st = c.stencil[k];
     c.normal[k] = oc.normal;
-    const Vec2 t = oc.tangent();
+    const ContactFrame<D> f(oc.normal);
     // Relative free velocity and compliance of the stencil: w = sum_j coef_j^2 w_j.
-    Vec2 v_rel = Vec2::Zero();
+    Vec v_rel = Vec::Zero();
     double w = 0.0;
     for (int j = 0; j < st.count; ++j) {
       const int node = st.node[j];
       v_rel += st.coef[j] * v_free(node);
-      const double wj = position ? dt * dt_n / model.mass[2 * node] : dt_n / model.mass[2 * node];
+      const double wj = position ? dt * dt_n / model.mass[D * node] : dt_n / model.mass[D * node];
       st.factor[j] = st.coef[j] * wj;
       w += st.coef[j] * st.factor[j];
       b.node_reaction[node].setZero();
     }
-    b.x_free[k] = position ? LocalPair{oc.gap, dt * t.dot(v_rel)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    b.x_free[k] = position ? Local{oc.gap, dt * f.tangential(v_rel)} : f.local(v_rel);
     b.weight[k] = w;
     c.active.push_back(k);
   }
@@ -126,9 +134,8 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
 
   // Warm start from the last step's reactions.
   for (int k : c.active) {
-    const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-    const Stencil& st = c.stencil[k];
-    const Vec2 r = c.reaction[k].n * n + c.reaction[k].t * t;
+    const auto& st = c.stencil[k];
+    const Vec r = ContactFrame<D>(c.normal[k]).global(c.reaction[k]);
     for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * r;
   }
   bool converged = true;
@@ -141,10 +148,21 @@ void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
   // step), exactly the change of the half-step kinetic energy 1/2 m v_{n+1/2}^2 - 1/2 m v_{n-1/2}^2
   // that R causes (a node stopped dead loses 1/2 m v^2); slip work -r_t times the slip increment
   // dt t.v_{n+1/2} of the step (>= 0 by the cone). Between bodies both are sums over the stencil.
-  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt_n * s.a.segment<2>(2 * j); };
-  auto v_next = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + dt_n * s.a.segment<2>(2 * j); };
+  auto v_mid = [&](int j) -> Vec { return s.v_half.segment<D>(D * j) + 0.5 * dt_n * s.a.segment<D>(D * j); };
+  auto v_next = [&](int j) -> Vec { return s.v_half.segment<D>(D * j) + dt_n * s.a.segment<D>(D * j); };
   for (int k : c.active) record_work(c, k, dt_n, v_mid, true, v_next, dt);
   finish_step(c, sweeps, converged);
 }
+
+// The instantiations: one per model type.
+#define RICOCHET_BIPOTENTIAL_FOR(M)                                                                          \
+  template BipotentialContactT<M::kDim> make_bipotential_contact<M>(                                         \
+      const M&, const std::vector<ObstacleOf<M>>&, const std::vector<std::vector<double>>&,                  \
+      const std::vector<PrescribedDof>&, const std::vector<BodyPair>&);                                      \
+  template void contact_phase<M>(const M&, const std::vector<ObstacleOf<M>>&, const ContactSettings&,        \
+                                 BipotentialContactT<M::kDim>&, State&);                                     \
+  template void add_reaction_accelerations<M>(const M&, const BipotentialContactT<M::kDim>&, State&);
+RICOCHET_BIPOTENTIAL_FOR(Model)
+#undef RICOCHET_BIPOTENTIAL_FOR
 
 }  // namespace ricochet

@@ -13,29 +13,34 @@
 
 namespace ricochet {
 
-struct BipotentialContact {
-  ContactSet set;
+template <int D>
+struct BipotentialContactT {
+  ContactSetT<D> set;
   // Per candidate, the local problem x = x_free + w r of the step.
-  std::vector<LocalPair> x_free;
+  std::vector<typename Space<D>::Local> x_free;
   std::vector<double> weight;            // w = local compliance
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> node_reaction;  // per node, sum of r in global axes [N]
+  std::vector<VecD<D>, Eigen::aligned_allocator<VecD<D>>> node_reaction;  // per node, sum of r in global axes [N]
 };
+using BipotentialContact = BipotentialContactT<2>;
 
 // The contact set (make_contact_set) with the local problems' arrays allocated.
-BipotentialContact make_bipotential_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+template <class M>
+BipotentialContactT<M::kDim> make_bipotential_contact(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                                             const std::vector<std::vector<double>>& friction,
                                             const std::vector<PrescribedDof>& prescribed,
                                             const std::vector<BodyPair>& pairs = {});
 
 // After evaluate(): solves the contact reactions of step n -> n+1 and adds them to s.a.
 // Allocates nothing.
-void contact_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const ContactSettings& settings, BipotentialContact& c, State& s);
+template <class M>
+void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, const ContactSettings& settings,
+                   BipotentialContactT<M::kDim>& c, State& s);
 
 // Adds the reactions of the last contact_phase() (c.reaction of c.active) to s.a as R/m, the
 // same operations contact_phase() ends with. The explicit loop calls it on a copy of the free
 // accelerations to observe the state at t_n with the reactions that act at t_n (docs/outputs.md,
 // History semantics). Allocates nothing.
-void add_reaction_accelerations(const Model& model, const BipotentialContact& c, State& s);
+template <class M>
+void add_reaction_accelerations(const M& model, const BipotentialContactT<M::kDim>& c, State& s);
 
 }  // namespace ricochet

@@ -5,24 +5,16 @@
 
 namespace ricochet {
 
-std::vector<std::string> contact_interface_names(const std::vector<Obstacle>& obstacles,
-                                                 const std::vector<BodyPair>& pairs) {
-  std::vector<std::string> names;
-  for (const Obstacle& o : obstacles) names.push_back(o.name);
-  for (std::size_t q = 0; q < pairs.size(); ++q) {
-    const std::string name = pairs[q].name.empty() ? "pair" + std::to_string(q) : pairs[q].name;
-    if (std::find(names.begin() + static_cast<long>(obstacles.size()), names.end(), name) == names.end())
-      names.push_back(name);
-  }
-  return names;
-}
-
-ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obstacles,
-                            const std::vector<std::vector<double>>& friction,
-                            const std::vector<PrescribedDof>& prescribed, const std::vector<BodyPair>& pairs) {
-  ContactSet c;
+template <class M>
+ContactSetT<M::kDim> make_contact_set(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                                      const std::vector<std::vector<double>>& friction,
+                                      const std::vector<PrescribedDof>& prescribed,
+                                      const std::vector<BodyPair>& pairs) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  ContactSetT<D> c;
   std::vector<bool> held(model.num_nodes(), false);
-  for (const auto& p : prescribed) held[p.dof / 2] = true;
+  for (const auto& p : prescribed) held[p.dof / D] = true;
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b)
     for (int o = 0; o < static_cast<int>(obstacles.size()); ++o)
       for (int node : model.bodies[b].boundary_nodes)
@@ -33,7 +25,10 @@ ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obs
   for (int q = 0; q < static_cast<int>(pairs.size()); ++q) {
     const BodyPair& bp = pairs[q];
     if (bp.slave == bp.master) throw std::invalid_argument("body pair: self-contact is not treated");
-    c.surfaces.push_back(make_surface(model, bp.master));
+    if constexpr (D == 2)
+      c.surfaces.push_back(make_surface(model, bp.master));
+    else
+      throw std::invalid_argument("body pair: contact between bodies is 2D only so far");
     for (int node : model.bodies[bp.slave].boundary_nodes)
       if (!held[node]) {
         c.candidates.push_back({node, -1, bp.friction, q});
@@ -59,7 +54,7 @@ ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obs
   const std::size_t n = c.candidates.size();
   c.reaction.assign(n, {});
   c.status.assign(n, ContactStatus::open);
-  c.normal.assign(n, Vec2::UnitY());
+  c.normal.assign(n, Vec::UnitY());
   c.stencil.resize(n);
   c.segment.assign(n, -1);
   for (std::size_t k = 0; k < n; ++k) {
@@ -71,7 +66,8 @@ ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obs
   return c;
 }
 
-void finish_step(ContactSet& c, int iterations, bool converged) {
+template <int D>
+void finish_step(ContactSetT<D>& c, int iterations, bool converged) {
   c.last.active = static_cast<int>(c.active.size());
   c.last.iterations = iterations;
   c.last.converged = converged;
@@ -84,53 +80,76 @@ void finish_step(ContactSet& c, int iterations, bool converged) {
   c.total.iterations_max = std::max(c.total.iterations_max, iterations);
 }
 
-void node_contact_fields(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
-                         const Eigen::VectorXd& u, double* force, double* gap, int* status) {
+template <class M>
+void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                         const ContactSetT<M::kDim>& c, const Eigen::VectorXd& u, double* force, double* gap,
+                         int* status) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
   const int n = model.num_nodes();
-  std::fill(force, force + 2 * n, 0.0);
+  std::fill(force, force + D * n, 0.0);
   std::fill(gap, gap + n, 0.0);
   std::fill(status, status + n, static_cast<int>(kNodeNoCandidate));
   for (std::size_t k = 0; k < c.candidates.size(); ++k) {
     const ContactCandidate& cc = c.candidates[k];
-    const Vec2 x = model.ref.col(cc.node) + u.segment<2>(2 * cc.node);
-    const double g = cc.pair < 0 ? closest(obstacles[cc.obstacle], x).gap
-                                 : signed_distance(model, c.surfaces[cc.pair], u, x);
+    const Vec x = model.ref.col(cc.node) + u.segment<D>(D * cc.node);
+    double g = 0.0;
+    if (cc.pair < 0)
+      g = closest(obstacles[cc.obstacle], x).gap;
+    else if constexpr (D == 2)
+      g = signed_distance(model, c.surfaces[cc.pair], u, x);
     const int code = c.status[k] == ContactStatus::stick  ? kNodeStick
                      : c.status[k] == ContactStatus::slip ? kNodeSlip
                                                           : kNodeOpen;
     gap[cc.node] = status[cc.node] == kNodeNoCandidate ? g : std::min(gap[cc.node], g);
     status[cc.node] = std::max(status[cc.node], code);
     if (c.status[k] == ContactStatus::open) continue;
-    const Vec2 nk = c.normal[k], t{nk.y(), -nk.x()};
-    const Vec2 r = c.reaction[k].n * nk + c.reaction[k].t * t;
-    const Stencil& st = c.stencil[k];
-    for (int j = 0; j < st.count; ++j) {
-      force[2 * st.node[j]] += st.coef[j] * r.x();
-      force[2 * st.node[j] + 1] += st.coef[j] * r.y();
-    }
+    const Vec r = ContactFrame<D>(c.normal[k]).global(c.reaction[k]);
+    const auto& st = c.stencil[k];
+    for (int j = 0; j < st.count; ++j)
+      for (int i = 0; i < D; ++i) force[D * st.node[j] + i] += st.coef[j] * r[i];
   }
 }
 
-double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
-                   const Eigen::VectorXd& u) {
+template <class M>
+double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                   const std::vector<typename Space<M::kDim>::Surface>& surfaces,
+                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
   double depth = 0.0;
-  auto position = [&](int j) -> Vec2 { return model.ref.col(j) + u.segment<2>(2 * j); };
+  auto position = [&](int j) -> Vec { return model.ref.col(j) + u.segment<D>(D * j); };
   int boxed = -1;  // a pair's candidates are contiguous: one bounding box per pair
-  Box2 box;
+  typename Space<D>::Box box;
   for (const ContactCandidate& cc : candidates) {
-    const Vec2 x = position(cc.node);
+    const Vec x = position(cc.node);
     if (cc.pair < 0) {
       depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
       continue;
     }
-    if (cc.pair != boxed) {
-      box = surface_box(surfaces.at(cc.pair), position, 0.0);
-      boxed = cc.pair;
+    if constexpr (D == 2) {
+      if (cc.pair != boxed) {
+        box = surface_box(surfaces.at(cc.pair), position, 0.0);
+        boxed = cc.pair;
+      }
+      if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
     }
-    if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
   }
   return depth;
 }
+
+// The instantiations: one per model type.
+#define RICOCHET_CONTACT_SET_FOR(M)                                                                              \
+  template ContactSetT<M::kDim> make_contact_set<M>(const M&, const std::vector<ObstacleOf<M>>&,                 \
+                                                    const std::vector<std::vector<double>>&,                     \
+                                                    const std::vector<PrescribedDof>&, const std::vector<BodyPair>&); \
+  template void finish_step<M::kDim>(ContactSetT<M::kDim>&, int, bool);                                          \
+  template void node_contact_fields<M>(const M&, const std::vector<ObstacleOf<M>>&, const ContactSetT<M::kDim>&,  \
+                                       const Eigen::VectorXd&, double*, double*, int*);                          \
+  template double penetration<M>(const M&, const std::vector<ObstacleOf<M>>&,                                    \
+                                 const std::vector<typename Space<M::kDim>::Surface>&,                           \
+                                 const std::vector<ContactCandidate>&, const Eigen::VectorXd&);
+RICOCHET_CONTACT_SET_FOR(Model)
+#undef RICOCHET_CONTACT_SET_FOR
 
 }  // namespace ricochet

@@ -20,16 +20,37 @@
 // record() / record_work() / finish_step() (contact_set.cpp); every scheme then has it.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "solver/contact/body_contact.hpp"
 #include "solver/schemes/central_difference.hpp"
+#include "solver/contact/contact_space.hpp"
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/obstacle.hpp"
 
 namespace ricochet {
+
+// The types of the contact module in dimension D (contact_space.hpp has the frame): a rigid
+// obstacle and its closest() result, a stencil (the nodes one reaction acts on), and for contact
+// between bodies the master surface and its bounding box.
+template <int D>
+struct Space;
+template <>
+struct Space<2> {
+  using Vec = Vec2;
+  using Local = LocalPair;
+  using Obstacle = ricochet::Obstacle;
+  using ObstacleContact = ricochet::ObstacleContact;
+  using Stencil = ricochet::Stencil;
+  using Surface = ricochet::Surface;
+  using Box = Box2;
+};
+// The obstacle type of a model type.
+template <class M>
+using ObstacleOf = typename Space<M::kDim>::Obstacle;
 
 // Settings of the bi-potential solves (semi-explicit and implicit).
 // Which quantity x the local problem is written on (docs/background.md, Rigid obstacle: the
@@ -107,25 +128,40 @@ struct InterfaceTotals {
 
 // The interfaces in order: the obstacles, then the body pairs by name (pairs with the same
 // name are one interface; an unnamed pair is one of its own, named "pair<q>").
-std::vector<std::string> contact_interface_names(const std::vector<Obstacle>& obstacles,
-                                                 const std::vector<BodyPair>& pairs);
+template <class Ob>
+std::vector<std::string> contact_interface_names(const std::vector<Ob>& obstacles,
+                                                 const std::vector<BodyPair>& pairs) {
+  std::vector<std::string> names;
+  for (const Ob& o : obstacles) names.push_back(o.name);
+  for (std::size_t q = 0; q < pairs.size(); ++q) {
+    const std::string name = pairs[q].name.empty() ? "pair" + std::to_string(q) : pairs[q].name;
+    if (std::find(names.begin() + static_cast<long>(obstacles.size()), names.end(), name) == names.end())
+      names.push_back(name);
+  }
+  return names;
+}
 
-// The candidates, their per-step geometry and reactions, and the observables.
-struct ContactSet {
+
+// The candidates, their per-step geometry and reactions, and the observables, in dimension D.
+template <int D>
+struct ContactSetT {
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+
   std::vector<ContactCandidate> candidates;
   std::vector<int> interface;  // per candidate, its index in contact_interface_names()
   bool any_friction = false;
   // Contact between bodies (body_contact.hpp): per pair the master's surface and, per step, its
   // bounding box.
-  std::vector<Surface> surfaces;
-  std::vector<Box2> boxes;
+  std::vector<typename Space<D>::Surface> surfaces;
+  std::vector<typename Space<D>::Box> boxes;
   // Per candidate.
-  std::vector<Stencil> stencil;          // the nodes its reaction acts on (rigid obstacles: the node alone)
+  std::vector<typename Space<D>::Stencil> stencil;          // the nodes its reaction acts on (rigid obstacles: the node alone)
   std::vector<int> segment;              // master segment of the last step (-1 none)
-  // The outward normal of the step's frame (t = (n_y, -n_x)), frozen for the step: `reaction`
-  // is expressed in it.
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> normal;
-  std::vector<LocalPair> reaction;       // r of the step (r_n, r_t) [N]
+  // The outward normal of the step's frame (ContactFrame<D>, contact_space.hpp), frozen for the
+  // step: `reaction` is expressed in it.
+  std::vector<Vec, Eigen::aligned_allocator<Vec>> normal;
+  std::vector<Local> reaction;           // r of the step (r_n, r_t) [N]
   std::vector<ContactStatus> status;     // of the last step
   std::vector<int> active;               // candidates with a reaction this step, ascending
 
@@ -134,18 +170,20 @@ struct ContactSet {
   std::vector<InterfaceStep> interface_last;     // per interface, of the last step
   std::vector<InterfaceTotals> interface_total;  // per interface, over the run
 };
+using ContactSet = ContactSetT<2>;
 
 // Candidates: the boundary nodes of each body paired with each obstacle, then the boundary
 // nodes of each pair's slave body, less nodes with a prescribed DOF. `friction[b][o]` is mu of
 // body b against obstacle o. Every per-candidate array is allocated.
-ContactSet make_contact_set(const Model& model, const std::vector<Obstacle>& obstacles,
-                            const std::vector<std::vector<double>>& friction,
-                            const std::vector<PrescribedDof>& prescribed,
-                            const std::vector<BodyPair>& pairs = {});
+template <class M>
+ContactSetT<M::kDim> make_contact_set(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                                      const std::vector<std::vector<double>>& friction,
+                                      const std::vector<PrescribedDof>& prescribed,
+                                      const std::vector<BodyPair>& pairs = {});
 
 // The body pairs' bounding boxes at positions eval(j), grown by the longest master segment.
-template <class Eval>
-void update_boxes(ContactSet& c, const Eval& eval) {
+template <int D, class Eval>
+void update_boxes(ContactSetT<D>& c, const Eval& eval) {
   for (std::size_t q = 0; q < c.surfaces.size(); ++q)
     c.boxes[q] = surface_box(c.surfaces[q], eval, c.surfaces[q].max_length);
 }
@@ -155,36 +193,43 @@ void update_boxes(ContactSet& c, const Eval& eval) {
 // the segment choice of body_contact.hpp (start positions X + u_start, velocities v_start,
 // evaluation positions eval(j)). Returns false (and clears the tracked segment) when a pair's
 // node faces no master segment.
-template <class Eval>
-bool candidate_frame(const Model& model, const std::vector<Obstacle>& obstacles, ContactSet& c, int k,
+template <class M, class Eval>
+bool candidate_frame(const M& model, const std::vector<ObstacleOf<M>>& obstacles, ContactSetT<M::kDim>& c, int k,
                      const Eigen::VectorXd& u_start, const Eigen::VectorXd& v_start, const Eval& eval,
-                     ObstacleContact& out) {
+                     typename Space<M::kDim>::ObstacleContact& out) {
+  constexpr int D = M::kDim;
   const ContactCandidate& cc = c.candidates[k];
   if (cc.pair < 0) {
-    out = step_frame(obstacles[cc.obstacle], model.ref.col(cc.node) + u_start.segment<2>(2 * cc.node), eval(cc.node));
+    out = step_frame(obstacles[cc.obstacle],
+                     VecD<D>(model.ref.col(cc.node) + u_start.template segment<D>(D * cc.node)), eval(cc.node));
     return true;
   }
-  const Surface& surf = c.surfaces[cc.pair];
-  if (!c.boxes[cc.pair].contains(eval(cc.node))) {
-    c.segment[k] = -1;
-    return false;
+  if constexpr (D != 2) {
+    return false;  // contact between bodies: 2D only so far (make_contact_set rejects pairs in 3D)
+  } else {
+    const Surface& surf = c.surfaces[cc.pair];
+    if (!c.boxes[cc.pair].contains(eval(cc.node))) {
+      c.segment[k] = -1;
+      return false;
+    }
+    auto start = [&](int j) -> Vec2 { return model.ref.col(j) + u_start.segment<2>(2 * j); };
+    auto vel = [&](int j) -> Vec2 { return v_start.segment<2>(2 * j); };
+    const NodeSegment ns = find_segment(surf, cc.node, c.segment[k], start, eval, vel);
+    c.segment[k] = ns.segment;
+    if (ns.segment < 0) return false;
+    const SurfaceSegment& sg = surf.segments[ns.segment];
+    Stencil& st = c.stencil[k];
+    st.count = 3;
+    st.node = {cc.node, sg.a, sg.b};
+    st.coef = {1.0, -(1.0 - ns.xi), -ns.xi};
+    out = {ns.gap, ns.normal};
+    return true;
   }
-  auto start = [&](int j) -> Vec2 { return model.ref.col(j) + u_start.segment<2>(2 * j); };
-  auto vel = [&](int j) -> Vec2 { return v_start.segment<2>(2 * j); };
-  const NodeSegment ns = find_segment(surf, cc.node, c.segment[k], start, eval, vel);
-  c.segment[k] = ns.segment;
-  if (ns.segment < 0) return false;
-  const SurfaceSegment& sg = surf.segments[ns.segment];
-  Stencil& st = c.stencil[k];
-  st.count = 3;
-  st.node = {cc.node, sg.a, sg.b};
-  st.coef = {1.0, -(1.0 - ns.xi), -ns.xi};
-  out = {ns.gap, ns.normal};
-  return true;
 }
 
 // Start of a step's bookkeeping: the last-step results cleared.
-inline void begin_step(ContactSet& c) {
+template <int D>
+void begin_step(ContactSetT<D>& c) {
   c.active.clear();
   c.last = ContactStep{};
   for (InterfaceStep& i : c.interface_last) i = InterfaceStep{};
@@ -193,22 +238,24 @@ inline void begin_step(ContactSet& c) {
 // The step's verdict on candidate k: its status (open, stick, slip) with its final reaction in
 // c.reaction[k]. Counts the status change, and for a closed contact the stick/slip counts and
 // the force sums. Call it once per candidate and step; the closed ones in ascending order.
-inline void record(ContactSet& c, int k, ContactStatus status) {
+template <int D>
+void record(ContactSetT<D>& c, int k, ContactStatus status) {
   c.last.status_changes += status != c.status[k];
   c.status[k] = status;
   if (status == ContactStatus::open) return;
   c.last.stick += status == ContactStatus::stick;
   c.last.slip += status == ContactStatus::slip;
   c.last.normal_force += c.reaction[k].n;
-  c.last.tangential_force += c.reaction[k].t;
+  c.last.tangential_force += tangential_sum_term(c.reaction[k]);
   InterfaceStep& i = c.interface_last[c.interface[k]];
   ++i.active;
   i.normal_force += c.reaction[k].n;
-  i.tangential_force += c.reaction[k].t;
+  i.tangential_force += tangential_sum_term(c.reaction[k]);
 }
 
 // Slip work of candidate k added to the friction dissipation (the run's and its interface's).
-inline void add_dissipation(ContactSet& c, int k, double work) {
+template <int D>
+void add_dissipation(ContactSetT<D>& c, int k, double work) {
   c.total.friction_dissipation += work;
   c.interface_total[c.interface[k]].friction_dissipation += work;
 }
@@ -219,37 +266,40 @@ inline void add_dissipation(ContactSet& c, int k, double work) {
 // schemes measure the work on v dt_n (scale dt_n, work_motion = v_{n-1/2} + dt_n/2 a_n, v_n for
 // a fixed step) and the slip on v_{n+1/2} dt_{n+1/2} (slip_scale dt_{n+1/2}; central_difference.hpp);
 // the implicit one on the step's displacement (scale 1, both u_{n+1} - u_n).
-template <class WorkMotion, class SlipMotion>
-void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_motion, bool slip,
+template <int D, class WorkMotion, class SlipMotion>
+void record_work(ContactSetT<D>& c, int k, double scale, const WorkMotion& work_motion, bool slip,
                  const SlipMotion& slip_motion, double slip_scale) {
-  const Stencil& st = c.stencil[k];
-  const Vec2 n = c.normal[k], t{n.y(), -n.x()};
-  const LocalPair r = c.reaction[k];
-  const Vec2 force = r.n * n + r.t * t;
-  Vec2 relative = Vec2::Zero();
+  using Vec = VecD<D>;
+  const auto& st = c.stencil[k];
+  const ContactFrame<D> f(c.normal[k]);
+  const Vec n = f.n;
+  const auto r = c.reaction[k];
+  const Vec force = f.global(r);
+  Vec relative = Vec::Zero();
   double work = 0.0, work_normal = 0.0;
   for (int j = 0; j < st.count; ++j) {
     const int node = st.node[j];
-    const Vec2 d = work_motion(node);
+    const Vec d = work_motion(node);
     if (slip) relative += st.coef[j] * slip_motion(node);
     work += (st.coef[j] * force).dot(d);
     work_normal += st.coef[j] * r.n * n.dot(d);
   }
-  if (slip) add_dissipation(c, k, -r.t * slip_scale * t.dot(relative));
+  if (slip) add_dissipation(c, k, slip_work(r, slip_scale, f.tangential(relative)));
   c.total.contact_work += scale * work;
   c.total.contact_work_normal += scale * work_normal;
   c.interface_total[c.interface[k]].contact_work += scale * work;
 }
 // The same with slip_scale = scale.
-template <class WorkMotion, class SlipMotion>
-void record_work(ContactSet& c, int k, double scale, const WorkMotion& work_motion, bool slip,
+template <int D, class WorkMotion, class SlipMotion>
+void record_work(ContactSetT<D>& c, int k, double scale, const WorkMotion& work_motion, bool slip,
                  const SlipMotion& slip_motion) {
   record_work(c, k, scale, work_motion, slip, slip_motion, scale);
 }
 
 // End of a step: the active count and the run totals. `iterations` and `converged` describe the
 // step's solve (0 and true for the penalty springs).
-void finish_step(ContactSet& c, int iterations, bool converged);
+template <int D>
+void finish_step(ContactSetT<D>& c, int iterations, bool converged);
 
 // What the contact set holds, per node, for a field snapshot (docs/outputs.md, fields/*.vtu).
 // Node status codes (the `contact_status` point array):
@@ -274,16 +324,20 @@ enum NodeContactStatus : int {
 // The reactions, normals, stencils and statuses are those of the set's last step, read as they
 // are (whatever step the scheme last recorded). Allocates nothing; O(candidates) plus, for body
 // pairs, O(candidates x master segments).
-void node_contact_fields(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
-                         const Eigen::VectorXd& u, double* force, double* gap, int* status);
+template <class M>
+void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                         const ContactSetT<M::kDim>& c, const Eigen::VectorXd& u, double* force, double* gap,
+                         int* status);
 
 // Largest depth of any candidate node behind its obstacle, or inside its pair's master body
 // (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this.
-double penetration(const Model& model, const std::vector<Obstacle>& obstacles,
-                   const std::vector<Surface>& surfaces, const std::vector<ContactCandidate>& candidates,
-                   const Eigen::VectorXd& u);
-inline double penetration(const Model& model, const std::vector<Obstacle>& obstacles, const ContactSet& c,
-                          const Eigen::VectorXd& u) {
+template <class M>
+double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                   const std::vector<typename Space<M::kDim>::Surface>& surfaces,
+                   const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u);
+template <class M>
+double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles, const ContactSetT<M::kDim>& c,
+                   const Eigen::VectorXd& u) {
   return penetration(model, obstacles, c.surfaces, c.candidates, u);
 }
 

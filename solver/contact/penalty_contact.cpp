@@ -45,21 +45,24 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
 
 }  // namespace
 
-PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstacle>& obstacles,
-                                    const std::vector<std::vector<double>>& friction,
-                                    const std::vector<PrescribedDof>& prescribed,
-                                    const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
+template <class M>
+PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                                              const std::vector<std::vector<double>>& friction,
+                                              const std::vector<PrescribedDof>& prescribed,
+                                              const PenaltySettings& settings, const std::vector<BodyPair>& pairs) {
+  constexpr int D = M::kDim;
   if (!(settings.scale_factor > 0.0))
     throw std::invalid_argument("penalty contact: scale factor f_si must be > 0");
-  PenaltyContact p;
+  PenaltyContactT<D> p;
   p.set = make_contact_set(model, obstacles, friction, prescribed, pairs);
-  const ContactSet& c = p.set;
+  const ContactSetT<D>& c = p.set;
   p.scale_factor = settings.scale_factor;
   const std::vector<double> k_node = nodal_stiffness_per_scale(model);
   // Per pair and master segment (the master's boundary edges, in order), f_si k_s; per pair the
   // smallest master boundary node mass.
   p.segment_stiffness.resize(c.surfaces.size());
   std::vector<double> m_master(c.surfaces.size()), k_max(c.surfaces.size(), 0.0);
+  if constexpr (D == 2)
   for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
     const BodyInfo& master = model.bodies[c.surfaces[q].body];
     const double bulk = penalty_bulk_modulus(master.material);
@@ -69,7 +72,7 @@ PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstac
       k_max[q] = std::max(k_max[q], ks);
     }
     m_master[q] = std::numeric_limits<double>::infinity();
-    for (int j : c.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[2 * j]);
+    for (int j : c.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[D * j]);
   }
   if (settings.soft_scale > 0.0) {
     if (!(settings.soft_dt > 0.0)) throw std::logic_error("penalty contact: soft_scale > 0 needs soft_dt > 0");
@@ -82,10 +85,10 @@ PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstac
   for (std::size_t i = 0; i < n; ++i) {
     const ContactCandidate& cc = c.candidates[i];
     double k = k_node[cc.node];
-    double m_star = model.mass[2 * cc.node];
+    double m_star = model.mass[D * cc.node];
     if (cc.pair >= 0) {
       k = std::min(k, k_max[cc.pair]);  // the stiffest spring the node can meet (for the step)
-      p.pair_compliance[i] = 1.0 / model.mass[2 * cc.node] + 1.0 / m_master[cc.pair];
+      p.pair_compliance[i] = 1.0 / model.mass[D * cc.node] + 1.0 / m_master[cc.pair];
       m_star = std::min(m_star, m_master[cc.pair]);
     }
     p.bulk_stiffness[i] = settings.scale_factor * k;
@@ -93,29 +96,30 @@ PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstac
     if (!(p.bulk_stiffness[i] > 0.0))
       throw std::logic_error("penalty contact: boundary node " + std::to_string(cc.node) + " has no boundary segment");
   }
-  p.last_position.assign(n, Vec2::Zero());
+  p.last_position.assign(n, VecD<D>::Zero());
   return p;
 }
 
-double penalty_critical_dt(const Model& model, const PenaltyContact& p) {
+template <class M>
+double penalty_critical_dt(const M& model, const PenaltyContactT<M::kDim>& p) {
+  constexpr int D = M::kDim;
   const std::vector<ContactCandidate>& cand = p.set.candidates;
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < cand.size(); ++i)
-    dt = std::min(dt, cand[i].pair < 0 ? 2.0 * std::sqrt(model.mass[2 * cand[i].node] / p.stiffness[i])
+    dt = std::min(dt, cand[i].pair < 0 ? 2.0 * std::sqrt(model.mass[D * cand[i].node] / p.stiffness[i])
                                        : 2.0 / std::sqrt(p.stiffness[i] * p.pair_compliance[i]));
   return dt;
 }
 
-double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p) {
-  return combined_critical_dt(model.critical_dt, penalty_critical_dt(model, p));
-}
 
-double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety) {
-  return safety * penalty_combined_critical_dt(model, p);
-}
-
-void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, PenaltyContact& p, State& s) {
-  ContactSet& c = p.set;
+template <class M>
+void penalty_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, PenaltyContactT<M::kDim>& p,
+                   State& s) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+  using Tangent = decltype(Local::t);  // double in 2D, a 2-vector of the tangent plane in 3D
+  ContactSetT<D>& c = p.set;
   const int count = static_cast<int>(c.candidates.size());
   begin_step(c);
   p.normal_energy = p.tangential_energy = 0.0;
@@ -123,21 +127,21 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
   const bool first = !p.initialized;
   p.initialized = true;
 
-  auto position = [&](int j) -> Vec2 { return model.ref.col(j) + s.u.segment<2>(2 * j); };
+  auto position = [&](int j) -> Vec { return model.ref.col(j) + s.u.segment<D>(D * j); };
   update_boxes(c, position);
 
   for (int k = 0; k < count; ++k) {
     const ContactCandidate& cc = c.candidates[k];
-    const Vec2 x = position(cc.node);
-    Stencil& st = c.stencil[k];
+    const Vec x = position(cc.node);
+    auto& st = c.stencil[k];
     // The frame at u_n (start and evaluation positions coincide).
-    ObstacleContact oc;
+    typename Space<D>::ObstacleContact oc;
     if (!candidate_frame(model, obstacles, c, k, s.u, s.v_half, position, oc)) {
       oc.gap = std::numeric_limits<double>::infinity();  // facing no segment: open
       st.count = 1;
     }
     const double g = oc.gap;
-    const Vec2 t = oc.tangent();
+    const ContactFrame<D> f(oc.normal);
     c.normal[k] = oc.normal;
     // Between bodies: f_si min(k_slave, k_s) of the segment met this step, at least the soft
     // constraint's k1 of the stencil's lightest node.
@@ -145,13 +149,13 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
     if (cc.pair >= 0 && c.segment[k] >= 0) {
       stiff = std::min(p.bulk_stiffness[k], p.segment_stiffness[cc.pair][c.segment[k]]);
       if (p.soft_factor > 0.0) {
-        double m_star = model.mass[2 * st.node[0]];
-        for (int j = 1; j < st.count; ++j) m_star = std::min(m_star, model.mass[2 * st.node[j]]);
+        double m_star = model.mass[D * st.node[0]];
+        for (int j = 1; j < st.count; ++j) m_star = std::min(m_star, model.mass[D * st.node[j]]);
         stiff = std::max(stiff, p.soft_factor * m_star);
       }
     }
     const double fn = g < 0.0 ? -stiff * g : 0.0;
-    double ft = 0.0;
+    Tangent ft = Local{}.t;  // 0
     ContactStatus status = fn > 0.0 ? ContactStatus::slip : ContactStatus::open;
     if (cc.friction_coeff > 0.0) {
       // Elastic predictor on the slip increment of the step, then the return map onto
@@ -160,36 +164,37 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
       // obstacle it projects the increment on the current tangent.
       // Between bodies the increment is the relative one over the last step,
       // dt_{n-1/2} t . sum_j coef_j v_{n-1/2,j}.
-      double ds = 0.0;
+      Tangent ds = Local{}.t;  // 0
       if (!first && cc.pair < 0) {
-        ds = t.dot(x) - t.dot(p.last_position[k]);
+        ds = f.tangential(x) - f.tangential(p.last_position[k]);
       } else if (!first) {
-        Vec2 dv = Vec2::Zero();
-        for (int j = 0; j < st.count; ++j) dv += st.coef[j] * s.v_half.segment<2>(2 * st.node[j]);
-        ds = s.dt_prev * t.dot(dv);
+        Vec dv = Vec::Zero();
+        for (int j = 0; j < st.count; ++j) dv += st.coef[j] * s.v_half.segment<D>(D * st.node[j]);
+        ds = s.dt_prev * f.tangential(dv);
       }
       p.last_position[k] = x;
-      const double old = c.reaction[k].t;
-      const double trial = old - stiff * ds;
+      const Tangent old = c.reaction[k].t;
+      const Tangent trial = old - stiff * ds;
       const double cap = cc.friction_coeff * fn;
-      if (std::abs(trial) <= cap) {
+      if (tangential_abs(trial) <= cap) {
         ft = trial;
         if (fn > 0.0) status = ContactStatus::stick;
       } else {
-        ft = std::copysign(cap, trial);
-        add_dissipation(c, k, (trial - ft) * (old + ft) / (2.0 * stiff));
+        ft = tangential_clamp(cap, trial);
+        add_dissipation(c, k, tangential_dot(trial - ft, old + ft) / (2.0 * stiff));
       }
     }
-    c.reaction[k] = {fn, ft};
+    c.reaction[k] = Local{fn, ft};
     record(c, k, status);
     if (!(fn > 0.0)) continue;
 
     depth = std::max(depth, -g);
     c.active.push_back(k);
-    const Vec2 force = fn * oc.normal + ft * t;
-    for (int j = 0; j < st.count; ++j) s.a.segment<2>(2 * st.node[j]) += st.coef[j] * force * model.inv_mass[2 * st.node[j]];
+    const Vec force = f.global(c.reaction[k]);
+    for (int j = 0; j < st.count; ++j)
+      s.a.segment<D>(D * st.node[j]) += st.coef[j] * force * model.inv_mass[D * st.node[j]];
     p.normal_energy += 0.5 * stiff * g * g;
-    p.tangential_energy += ft * ft / (2.0 * stiff);
+    p.tangential_energy += tangential_dot(ft, ft) / (2.0 * stiff);
   }
   c.last.stored_energy = p.normal_energy + p.tangential_energy;
   p.penetration = depth;
@@ -198,9 +203,19 @@ void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles, P
   // change of the half-step kinetic energy that F causes (as contact_phase records it). The
   // friction dissipation is the return map's, above.
   const double dt = velocity_step(s);
-  auto v_mid = [&](int j) -> Vec2 { return s.v_half.segment<2>(2 * j) + 0.5 * dt * s.a.segment<2>(2 * j); };
+  auto v_mid = [&](int j) -> Vec { return s.v_half.segment<D>(D * j) + 0.5 * dt * s.a.segment<D>(D * j); };
   for (int k : c.active) record_work(c, k, dt, v_mid, false, v_mid);
   finish_step(c, 0, true);
 }
+
+// The instantiations: one per model type.
+#define RICOCHET_PENALTY_FOR(M)                                                                                \
+  template PenaltyContactT<M::kDim> make_penalty_contact<M>(                                                   \
+      const M&, const std::vector<ObstacleOf<M>>&, const std::vector<std::vector<double>>&,                    \
+      const std::vector<PrescribedDof>&, const PenaltySettings&, const std::vector<BodyPair>&);                \
+  template double penalty_critical_dt<M>(const M&, const PenaltyContactT<M::kDim>&);                           \
+  template void penalty_phase<M>(const M&, const std::vector<ObstacleOf<M>>&, PenaltyContactT<M::kDim>&, State&);
+RICOCHET_PENALTY_FOR(Model)
+#undef RICOCHET_PENALTY_FOR
 
 }  // namespace ricochet

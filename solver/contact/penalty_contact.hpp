@@ -60,12 +60,13 @@ namespace ricochet {
 
 // The contact set and the springs: per candidate its stiffness and the tangential spring's
 // state (the spring force f_t is set.reaction[k].t, the normal force f_n set.reaction[k].n).
-struct PenaltyContact {
-  ContactSet set;
+template <int D>
+struct PenaltyContactT {
+  ContactSetT<D> set;
   std::vector<double> stiffness;             // per candidate, k [N/m] (between bodies: the largest, for the step)
   std::vector<double> bulk_stiffness;        // per candidate, f_si min(k_i, largest k_s) between bodies [N/m]
   double soft_factor = 0.0;                  // soft_scale / (2 soft_dt^2): k1 = soft_factor m* [1/s^2]
-  std::vector<Vec2, Eigen::aligned_allocator<Vec2>> last_position;  // per candidate, x at the last step [m]
+  std::vector<VecD<D>, Eigen::aligned_allocator<VecD<D>>> last_position;  // per candidate, x at the last step [m]
   // Between bodies: `pair_compliance` = 1/m_slave + 1/m_master,min for a pair candidate (the
   // spring between the slave node and the lightest master node).
   std::vector<double> pair_compliance;       // per candidate, 0 for rigid obstacles [1/kg]
@@ -78,6 +79,14 @@ struct PenaltyContact {
   double tangential_energy = 0.0; // sum f_t^2 / (2 k) [J]
   double penetration = 0.0;       // largest depth -g of any candidate (>= 0) [m]
 };
+using PenaltyContact = PenaltyContactT<2>;
+
+// The combination above of an element limit dt_e and a spring limit dt_p; dt_e when dt_p is
+// not finite (no springs) [s].
+inline double combined_critical_dt(double dt_e, double dt_p) {
+  if (!std::isfinite(dt_p)) return dt_e;
+  return 1.0 / std::sqrt(1.0 / (dt_e * dt_e) + 1.0 / (dt_p * dt_p));
+}
 
 // Bulk modulus used by the penalty stiffness: the 3D K = lambda + 2 mu / 3 [Pa] (see above).
 double penalty_bulk_modulus(const Material& material);
@@ -89,7 +98,8 @@ double penalty_bulk_modulus(const Material& material);
 // default PENO = 1: the minimum of the slave node's and the master segment's stiffness); the
 // force -k g n acts on the slave node and, with weights -(1 - xi) and -xi, on the segment's
 // nodes. `stiffness` holds f_si min(k_i, largest k_s of the master), which sets the step.
-PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstacle>& obstacles,
+template <class M>
+PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                                     const std::vector<std::vector<double>>& friction,
                                     const std::vector<PrescribedDof>& prescribed,
                                     const PenaltySettings& settings,
@@ -98,21 +108,19 @@ PenaltyContact make_penalty_contact(const Model& model, const std::vector<Obstac
 // Largest stable step of the contact springs alone: min over candidates of 2 sqrt(m_i / k_i)
 // (a node mass on a spring to the ground; between bodies 2 / sqrt(k (1/m_s + 1/m_master,min)),
 // two masses on a spring), +infinity without candidates [s].
-double penalty_critical_dt(const Model& model, const PenaltyContact& p);
+template <class M>
+double penalty_critical_dt(const M& model, const PenaltyContactT<M::kDim>& p);
 
 // Critical step of the elements and the springs together [s]:
 //   dt_c = 1 / sqrt(1 / dt_e^2 + 1 / dt_p^2),  dt_e = model.critical_dt, dt_p = penalty_critical_dt.
 // The springs only add stiffness, so omega_max^2 <= omega_e^2 + omega_p^2 (Weyl), and with
 // dt_e and dt_p both bounds dt_c is one too. min(dt_e, dt_p) is not: near dt_e = dt_p the
 // coupled system is up to sqrt(2) faster (see tests/test_penalty_contact.cpp, PenaltyTimeStep).
-double penalty_combined_critical_dt(const Model& model, const PenaltyContact& p);
-
-// The combination above of an element limit dt_e and a spring limit dt_p; dt_e when dt_p is
-// not finite (no springs) [s].
-inline double combined_critical_dt(double dt_e, double dt_p) {
-  if (!std::isfinite(dt_p)) return dt_e;
-  return 1.0 / std::sqrt(1.0 / (dt_e * dt_e) + 1.0 / (dt_p * dt_p));
+template <class M>
+double penalty_combined_critical_dt(const M& model, const PenaltyContactT<M::kDim>& p) {
+  return combined_critical_dt(model.critical_dt, penalty_critical_dt(model, p));
 }
+
 
 // safety * penalty_combined_critical_dt: the fixed step of a penalty run [s]. Stable is not
 // accurate: when the springs set the step (f_si >~ 3 on square cells), an impact at 0.9 x the
@@ -120,11 +128,15 @@ inline double combined_critical_dt(double dt_e, double dt_p) {
 // their one-sided springs; 0.3-0.7 x brings it to ~1 % (measured, test_penalty_contact.cpp).
 // With the LS-DYNA default f_si = 0.1 the elements set the step and the springs have
 // omega dt ~ 0.35.
-double penalty_stable_time_step(const Model& model, const PenaltyContact& p, double safety);
+template <class M>
+double penalty_stable_time_step(const M& model, const PenaltyContactT<M::kDim>& p, double safety) {
+  return safety * penalty_combined_critical_dt(model, p);
+}
 
 // After evaluate(): the penalty forces of the state at t_n, added to s.a; the step's results and
 // energies recorded in p.set. Allocates nothing.
-void penalty_phase(const Model& model, const std::vector<Obstacle>& obstacles,
-                   PenaltyContact& p, State& s);
+template <class M>
+void penalty_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, PenaltyContactT<M::kDim>& p,
+                   State& s);
 
 }  // namespace ricochet

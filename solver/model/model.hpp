@@ -125,6 +125,7 @@ enum class BlockKind { q4_hourglass, q4_full, t3 };
 inline constexpr BlockKind kBlockKinds[] = {BlockKind::q4_hourglass, BlockKind::q4_full, BlockKind::t3};
 
 struct Model {
+  static constexpr int kDim = 2;  // the dimension: templates on the model type read it
   PlaneMode plane = PlaneMode::stress;
   Eigen::Matrix2Xd ref;         // 2 x n reference coordinates, all bodies [m]
   Eigen::VectorXd mass;         // lumped mass per DOF (2n, x and y equal) [kg]
@@ -146,6 +147,14 @@ struct Model {
     return kind == BlockKind::q4_hourglass ? q4_hourglass.size() : kind == BlockKind::q4_full ? q4_full.size() : t3.size();
   }
 };
+
+// fn(block) for every element block (conn, first_cell, body), whatever its formulation.
+template <class Fn>
+void for_each_cell_block(const Model& model, Fn&& fn) {
+  for (const auto& b : model.q4_full) fn(b);
+  for (const auto& b : model.q4_hourglass) fn(b);
+  for (const auto& b : model.t3) fn(b);
+}
 
 // Builds the model; throws std::invalid_argument for a cell with non-positive area or a
 // non-convex quadrilateral (naming the body and cell), or non-positive thickness/density.

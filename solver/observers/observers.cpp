@@ -4,7 +4,8 @@
 
 namespace ricochet {
 
-Energies observe_energies(const Model& model, const State& s, const Eigen::VectorXd& u0) {
+template <class M>
+Energies observe_energies(const M& model, const State& s, const Eigen::VectorXd& u0) {
   Energies e;
   const Eigen::VectorXd& m = model.mass;
   double kinetic = 0.0;
@@ -20,12 +21,17 @@ Energies observe_energies(const Model& model, const State& s, const Eigen::Vecto
   return e;
 }
 
-Vec2 linear_momentum(const Model& model, const State& s) {
-  Vec2 p = Vec2::Zero();
+template <class M>
+Eigen::Matrix<double, M::kDim, 1> linear_momentum(const M& model, const State& s) {
+  constexpr int D = M::kDim;
+  Eigen::Matrix<double, D, 1> p = Eigen::Matrix<double, D, 1>::Zero();
   for (int i = 0; i < model.num_nodes(); ++i)
-    for (int k = 0; k < 2; ++k) p[k] += model.mass[2 * i + k] * velocity_at_step(s, 2 * i + k);
+    for (int k = 0; k < D; ++k) p[k] += model.mass[D * i + k] * velocity_at_step(s, D * i + k);
   return p;
 }
+
+template Energies observe_energies<Model>(const Model&, const State&, const Eigen::VectorXd&);
+template Vec2 linear_momentum<Model>(const Model&, const State&);
 
 double energy_error(const Energies& e, double initial_energy, double reference_energy) {
   if (!(reference_energy > 0.0)) return 0.0;

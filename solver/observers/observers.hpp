@@ -16,10 +16,12 @@ struct Energies {
 };
 
 // Needs the force totals of an evaluate() with energy. u0 is the initial displacement.
-Energies observe_energies(const Model& model, const State& s, const Eigen::VectorXd& u0);
+template <class M>
+Energies observe_energies(const M& model, const State& s, const Eigen::VectorXd& u0);
 
 // sum_I m_I v_n,I [kg m/s]
-Vec2 linear_momentum(const Model& model, const State& s);
+template <class M>
+Eigen::Matrix<double, M::kDim, 1> linear_momentum(const M& model, const State& s);
 
 // |E(t) + D(t) - E_0 - W_ext(t)| / E_ref with E(t) the total above, D the friction dissipation,
 // E_ref = max(E_0, |W_ext| seen so far); 0 when E_ref is 0. [-]

@@ -20,22 +20,36 @@ constexpr double kMaxPlannedSteps = 9007199254740992.0;  // 2^53
 // mass so that it is the spin alone (no orbital part from the translation), and computed in
 // two passes (centre first) rather than as sum m x x v - M x_c x v_c, which would cancel
 // digits for a body far from the origin. O(nodes), run at sample steps only.
-double angular_momentum(const Model& model, const State& s) {
+// In 3D the vector L, the same sum with the cross product.
+template <class M>
+typename MonitorSpace<M::kDim>::Angular angular_momentum(const M& model, const State& s) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  using Angular = typename MonitorSpace<D>::Angular;
+  auto position = [&](int i) -> Vec { return model.ref.col(i) + s.u.segment<D>(D * i); };
+  auto velocity = [&](int i) -> Vec {
+    Vec v;
+    for (int k = 0; k < D; ++k) v[k] = velocity_at_step(s, D * i + k);
+    return v;
+  };
   double mass = 0.0;
-  Vec2 mx = Vec2::Zero(), mv = Vec2::Zero();
+  Vec mx = Vec::Zero(), mv = Vec::Zero();
   for (int i = 0; i < model.num_nodes(); ++i) {
-    const double m = model.mass[2 * i];
+    const double m = model.mass[D * i];
     mass += m;
-    mx += m * (model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]));
-    mv += m * Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1));
+    mx += m * position(i);
+    mv += m * velocity(i);
   }
-  if (!(mass > 0.0)) return 0.0;
-  const Vec2 xc = mx / mass, vc = mv / mass;
-  double L = 0.0;
+  Angular L = MonitorSpace<D>::zero_angular();
+  if (!(mass > 0.0)) return L;
+  const Vec xc = mx / mass, vc = mv / mass;
   for (int i = 0; i < model.num_nodes(); ++i) {
-    const Vec2 r = model.ref.col(i) + Vec2(s.u[2 * i], s.u[2 * i + 1]) - xc;
-    const Vec2 w = Vec2(velocity_at_step(s, 2 * i), velocity_at_step(s, 2 * i + 1)) - vc;
-    L += model.mass[2 * i] * (r.x() * w.y() - r.y() * w.x());
+    const Vec r = position(i) - xc;
+    const Vec w = velocity(i) - vc;
+    if constexpr (D == 2)
+      L += model.mass[D * i] * (r.x() * w.y() - r.y() * w.x());
+    else
+      L += model.mass[D * i] * r.cross(w);
   }
   return L;
 }
@@ -43,7 +57,8 @@ double angular_momentum(const Model& model, const State& s) {
 
 // Cells with a node on a contact boundary: the candidate nodes, and the boundary nodes of the
 // master bodies of body pairs.
-std::vector<std::uint8_t> contact_boundary_cells(const Model& model, const RunSettings& settings,
+template <class M>
+std::vector<std::uint8_t> contact_boundary_cells(const M& model, const RunSettings& settings,
                                                  const std::vector<ContactCandidate>& candidates) {
   std::vector<std::uint8_t> node(model.num_nodes(), 0), cell(model.num_cells(), 0);
   for (const ContactCandidate& c : candidates) node[c.node] = 1;
@@ -55,55 +70,53 @@ std::vector<std::uint8_t> contact_boundary_cells(const Model& model, const RunSe
       for (int n : block.conn[e])
         if (node[n]) cell[block.first_cell + e] = 1;
   };
-  for (const auto& b : model.q4_full) mark(b);
-  for (const auto& b : model.q4_hourglass) mark(b);
-  for (const auto& b : model.t3) mark(b);
+  for_each_cell_block(model, mark);
   return cell;
 }
 
 // Body, element within the body and current centroid of a global cell.
-void locate_cell(const Model& model, const State& s, int cell, StressPeak& p) {
+template <class M>
+void locate_cell(const M& model, const State& s, int cell, StressPeak& p) {
+  constexpr int D = M::kDim;
   p.cell = cell;
-  auto find = [&](const auto& block) {
+  bool found = false;
+  for_each_cell_block(model, [&](const auto& block) {
     const int k = cell - block.first_cell;
-    if (k < 0 || k >= static_cast<int>(block.conn.size())) return false;
-    Vec2 c = Vec2::Zero();
-    for (int n : block.conn[k]) c += model.ref.col(n) + Vec2(s.u[2 * n], s.u[2 * n + 1]);
+    if (found || k < 0 || k >= static_cast<int>(block.conn.size())) return;
+    VecD<D> c = VecD<D>::Zero();
+    for (int n : block.conn[k]) c += model.ref.col(n) + s.u.segment<D>(D * n);
     c /= static_cast<double>(block.conn[k].size());
     p.x = c.x();
     p.y = c.y();
+    if constexpr (D == 3) p.z = c.z();
     p.body = block.body;
     p.element = cell - model.bodies[block.body].first_cell;
-    return true;
-  };
-  for (const auto& b : model.q4_full)
-    if (find(b)) return;
-  for (const auto& b : model.q4_hourglass)
-    if (find(b)) return;
-  for (const auto& b : model.t3)
-    if (find(b)) return;
+    found = true;
+  });
 }
 
 // What a history row is made of at a sample step.
+template <int D>
 struct HistoryInputs {
   const State& s;
   const Energies& e;
   const ContactStep& c;     // the contact set's last step
   const ContactTotals& ct;  // and its run totals
   double energy_error = 0.0;      // [-]
-  Vec2 momentum = Vec2::Zero();   // [kg m/s]
+  VecD<D> momentum = VecD<D>::Zero();  // [kg m/s]
   double von_mises = 0.0;         // [Pa]
   double penetration = 0.0;       // [m]
-  double angular_momentum = 0.0;  // [kg m^2/s]
+  typename MonitorSpace<D>::Angular angular_momentum = MonitorSpace<D>::zero_angular();  // [kg m^2/s]
 };
 
 // The history's columns before the probes', in order, each with its value: the one definition
 // of a history row (docs/outputs.md, history.csv). fn(name, value) is called per column; with
-// x null only the names are wanted (the values are 0).
-template <class Fn>
-void history_fields(const HistoryInputs* x, Fn&& fn) {
+// x null only the names are wanted (the values are 0). In 3D the momentum has a z column and the
+// angular momentum three (about x, y, z) where 2D has its z component alone.
+template <int D, class Fn>
+void history_fields(const HistoryInputs<D>* x, Fn&& fn) {
   auto of = [x](auto get) { return x ? get(*x) : 0.0; };
-  using X = HistoryInputs;
+  using X = HistoryInputs<D>;
   fn("time", of([](const X& h) { return h.s.time; }));
   fn("dt", of([](const X& h) { return h.s.dt; }));
   fn("kinetic_energy", of([](const X& h) { return h.e.kinetic; }));
@@ -115,6 +128,7 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   fn("energy_error", of([](const X& h) { return h.energy_error; }));
   fn("momentum_x", of([](const X& h) { return h.momentum.x(); }));
   fn("momentum_y", of([](const X& h) { return h.momentum.y(); }));
+  if constexpr (D == 3) fn("momentum_z", of([](const X& h) { return h.momentum.z(); }));
   fn("von_mises_max", of([](const X& h) { return h.von_mises; }));
   fn("penetration_max", of([](const X& h) { return h.penetration; }));
   fn("contact_nodes", of([](const X& h) { return static_cast<double>(h.c.active); }));
@@ -125,7 +139,13 @@ void history_fields(const HistoryInputs* x, Fn&& fn) {
   fn("contact_slip", of([](const X& h) { return static_cast<double>(h.c.slip); }));
   fn("contact_iterations", of([](const X& h) { return static_cast<double>(h.c.iterations); }));
   fn("contact_energy", of([](const X& h) { return h.c.stored_energy; }));
-  fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
+  if constexpr (D == 2) {
+    fn("angular_momentum", of([](const X& h) { return h.angular_momentum; }));
+  } else {
+    fn("angular_momentum_x", of([](const X& h) { return h.angular_momentum.x(); }));
+    fn("angular_momentum_y", of([](const X& h) { return h.angular_momentum.y(); }));
+    fn("angular_momentum_z", of([](const X& h) { return h.angular_momentum.z(); }));
+  }
   fn("contact_work_normal", of([](const X& h) { return h.ct.contact_work_normal; }));
   fn("contact_status_changes", of([](const X& h) { return static_cast<double>(h.c.status_changes); }));
 }
@@ -142,18 +162,28 @@ std::size_t History::column(const std::string& name) const {
   return static_cast<std::size_t>(it - columns.begin());
 }
 
-std::vector<std::string> history_columns(const std::vector<Probe>& probes,
-                                         const std::vector<std::string>& interfaces) {
+std::vector<std::string> history_columns(const std::vector<Probe>& probes, const std::vector<std::string>& interfaces,
+                                         int dimension) {
   std::vector<std::string> c;
-  history_fields(nullptr, [&c](const char* name, double) { c.emplace_back(name); });
+  auto name = [&c](const char* n, double) { c.emplace_back(n); };
+  if (dimension == 3)
+    history_fields<3>(nullptr, name);
+  else
+    history_fields<2>(nullptr, name);
   for (const std::string& i : interfaces)
     for (const char* s : kInterfaceColumns) c.push_back(i + s);
-  for (const auto& p : probes)
-    for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
+  for (const auto& p : probes) {
+    if (dimension == 3)
+      for (const char* s : {"_ux", "_uy", "_uz", "_vx", "_vy", "_vz"}) c.push_back(p.name + s);
+    else
+      for (const char* s : {"_ux", "_uy", "_vx", "_vy"}) c.push_back(p.name + s);
+  }
   return c;
 }
 
-RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact)
+template <class M>
+RunMonitorT<M>::RunMonitorT(const M& model, const RunSettings& settings, RunResult& result,
+                            const ContactSetT<M::kDim>& contact)
     : model_(model), settings_(settings), result_(result), contact_(contact) {
   if (!(settings.dt > 0.0) || !(settings.end_time >= 0.0))
     throw std::invalid_argument("run: dt must be > 0 and end_time >= 0");
@@ -164,9 +194,11 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   planned_ = static_cast<long>(planned);
   result.planned_steps = planned_;
   result.history.columns =
-      history_columns(settings.probes, contact.candidates.empty()
-                                           ? std::vector<std::string>{}
-                                           : contact_interface_names(settings.obstacles, settings.body_pairs));
+      history_columns(settings.probes,
+                      contact.candidates.empty()
+                          ? std::vector<std::string>{}
+                          : contact_interface_names(obstacles_of(settings, model), settings.body_pairs),
+                      M::kDim);
   variable_ = settings.dt_update_interval > 0;
   if (!variable_) {
     // Samples: step round(k x interval / dt) for k = 0, 1, ... up to the planned step, and the
@@ -205,7 +237,7 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   tracking_.contact_cell = contact_cell_.data();
   tracking_.measure = settings.stress_measure;
   result.stress_measure = settings.stress_measure;
-  result.total_mass = 0.5 * model.mass.sum();
+  result.total_mass = model.mass.sum() / M::kDim;
   result.contact_candidates = static_cast<int>(contact.candidates.size());
   // The rest window of `drift`: up to the first time a nodal load changes.
   result.rest_until = settings.end_time;
@@ -215,12 +247,14 @@ RunMonitor::RunMonitor(const Model& model, const RunSettings& settings, RunResul
   cpu0_ = std::clock();
 }
 
-bool RunMonitor::sample_at(long n) const {
+template <class M>
+bool RunMonitorT<M>::sample_at(long n) const {
   if (variable_) return n == planned_step_ && planned_sample_;
   return next_sample_step_ == n;
 }
 
-void RunMonitor::next_sample() {
+template <class M>
+void RunMonitorT<M>::next_sample() {
   const long n = next_sample_step_;
   if (n >= planned_) {
     next_sample_step_ = -1;  // the planned step was the last
@@ -240,14 +274,17 @@ void RunMonitor::next_sample() {
   }
 }
 
-bool RunMonitor::field_at(long n) const {
+template <class M>
+bool RunMonitorT<M>::field_at(long n) const {
   if (variable_) return n == planned_step_ && planned_field_;
   return next_field_ < field_steps_.size() && field_steps_[next_field_] == n;
 }
 
-bool RunMonitor::is_last_step(long n) const { return variable_ ? n == planned_step_ && planned_last_ : n == planned_; }
+template <class M>
+bool RunMonitorT<M>::is_last_step(long n) const { return variable_ ? n == planned_step_ && planned_last_ : n == planned_; }
 
-void RunMonitor::plan_step(const State& s, bool last) {
+template <class M>
+void RunMonitorT<M>::plan_step(const State& s, bool last) {
   planned_step_ = s.step;
   planned_last_ = last;
   // Times before the midpoint of the step from t_n (all that are left at the last state) go to
@@ -270,7 +307,8 @@ void RunMonitor::plan_step(const State& s, bool last) {
   }
 }
 
-const StressTracking* RunMonitor::stress_tracking(long n) {
+template <class M>
+const StressTracking* RunMonitorT<M>::stress_tracking(long n) {
   const bool sample = sample_at(n);
   const bool field = field_at(n);
   if (!sample && !field && !settings_.stress_every_step) return nullptr;
@@ -287,7 +325,8 @@ const StressTracking* RunMonitor::stress_tracking(long n) {
   return &tracking_;
 }
 
-void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
+template <class M>
+void RunMonitorT<M>::track_stress(const State& s, const StressPeaks& peaks) {
   if (s.step != tracked_step_) throw std::logic_error("RunMonitor: track_stress for another step than stress_tracking's");
   sampled_step_ = tracking_.samples() ? s.step : -1;
   if (!tracking_.sampled_max && !settings_.stress_every_step) return;  // a field snapshot's pass alone
@@ -309,7 +348,8 @@ void RunMonitor::track_stress(const State& s, const StressPeaks& peaks) {
   }
 }
 
-void RunMonitor::contact_step(double t_begin, double dt, double impulse_dt) {
+template <class M>
+void RunMonitorT<M>::contact_step(double t_begin, double dt, double impulse_dt) {
   const ContactStep& c = contact_.last;
   result_.contact_impulse_normal += c.normal_force * impulse_dt;
   result_.contact_impulse_tangential += c.tangential_force * impulse_dt;
@@ -320,11 +360,13 @@ void RunMonitor::contact_step(double t_begin, double dt, double impulse_dt) {
   }
 }
 
-bool RunMonitor::is_monitor_step(long n) const {
+template <class M>
+bool RunMonitorT<M>::is_monitor_step(long n) const {
   return sample_at(n) || field_at(n) || n % monitor_every_ == 0 || is_last_step(n);
 }
 
-void RunMonitor::diverge(const State& s, std::string reason) {
+template <class M>
+void RunMonitorT<M>::diverge(const State& s, std::string reason) {
   result_.status = RunStatus::diverged;
   result_.reason = std::move(reason);
   result_.diverged_step = s.step;
@@ -343,7 +385,8 @@ void RunMonitor::diverge(const State& s, std::string reason) {
   }
 }
 
-FieldSnapshot RunMonitor::snapshot(const State& s) const {
+template <class M>
+FieldSnapshot RunMonitorT<M>::snapshot(const State& s) const {
   FieldSnapshot f;
   f.step = s.step;
   f.time = s.time;
@@ -364,16 +407,19 @@ FieldSnapshot RunMonitor::snapshot(const State& s) const {
   return f;
 }
 
-void RunMonitor::contact_fields(const State& s, FieldSnapshot& f) const {
+template <class M>
+void RunMonitorT<M>::contact_fields(const State& s, FieldSnapshot& f) const {
   const std::size_t n = static_cast<std::size_t>(model_.num_nodes());
-  f.contact_force.resize(2 * n);
+  f.contact_force.resize(M::kDim * n);
   f.contact_gap.resize(n);
   f.contact_status.resize(n);
-  node_contact_fields(model_, settings_.obstacles, contact_, s.u, f.contact_force.data(), f.contact_gap.data(),
-                      f.contact_status.data());
+  node_contact_fields(model_, obstacles_of(settings_, model_), contact_, s.u, f.contact_force.data(),
+                      f.contact_gap.data(), f.contact_status.data());
 }
 
-bool RunMonitor::observe(const State& s, double kinetic0) {
+template <class M>
+bool RunMonitorT<M>::observe(const State& s, double kinetic0) {
+  constexpr int D = M::kDim;
   const long n = s.step;
   if (n == 0) u0_ = s.u;
   track_displacement(s);
@@ -407,9 +453,10 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
     VonMises2 sampled = sampled_vm2_;  // of this step's force (or stress) pass
     for (double& x : sampled) x = std::sqrt(x);
     max_into(result_.von_mises_sampled_max, sampled);
-    const double depth = penetration(model_, settings_.obstacles, contact_, s.u);
+    const double depth = penetration(model_, obstacles_of(settings_, model_), contact_, s.u);
     auto& v = result_.history.values;
-    const HistoryInputs row{s, e, c, contact_.total, error, linear_momentum(model_, s), vm, depth, angular_momentum(model_, s)};
+    const HistoryInputs<D> row{s,  e,  c, contact_.total, error, linear_momentum(model_, s),
+                               vm, depth, angular_momentum(model_, s)};
     history_fields(&row, [&v](const char*, double value) { v.push_back(value); });
     if (!contact_.candidates.empty())
       for (std::size_t i = 0; i < contact_.interface_last.size(); ++i) {
@@ -419,8 +466,9 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
                            it.contact_work, it.friction_dissipation});
       }
     for (const auto& pr : settings_.probes) {
-      const int d = 2 * pr.node;
-      v.insert(v.end(), {s.u[d], s.u[d + 1], velocity_at_step(s, d), velocity_at_step(s, d + 1)});
+      const int d = D * pr.node;
+      for (int k = 0; k < D; ++k) v.push_back(s.u[d + k]);
+      for (int k = 0; k < D; ++k) v.push_back(velocity_at_step(s, d + k));
     }
     result_.energy_error_max = std::max(result_.energy_error_max, error);
     result_.penetration_max = std::max(result_.penetration_max, depth);
@@ -438,11 +486,13 @@ bool RunMonitor::observe(const State& s, double kinetic0) {
   return true;
 }
 
-void RunMonitor::track_displacement(const State& s) {
+template <class M>
+void RunMonitorT<M>::track_displacement(const State& s) {
+  constexpr int D = M::kDim;
   double largest = 0.0;
   int node = -1;
   for (int i = 0; i < model_.num_nodes(); ++i) {
-    const double d = (s.u.segment<2>(2 * i) - u0_.segment<2>(2 * i)).squaredNorm();
+    const double d = (s.u.segment<D>(D * i) - u0_.segment<D>(D * i)).squaredNorm();
     if (d > largest) largest = d, node = i;
   }
   largest = std::sqrt(largest);
@@ -453,7 +503,8 @@ void RunMonitor::track_displacement(const State& s) {
   }
 }
 
-void RunMonitor::finish(const State& s) {
+template <class M>
+void RunMonitorT<M>::finish(const State& s) {
   result_.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   result_.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
   result_.steps = s.step;
@@ -472,5 +523,7 @@ void RunMonitor::finish(const State& s) {
   if (c.steps_with_contact > 0)
     result_.contact_sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
 }
+
+template class RunMonitorT<Model>;
 
 }  // namespace ricochet

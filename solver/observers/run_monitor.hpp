@@ -13,11 +13,28 @@
 
 namespace ricochet {
 
-class RunMonitor {
+// What the angular momentum is in dimension D: its z component in 2D, the vector in 3D
+// [kg m^2/s].
+template <int D>
+struct MonitorSpace;
+template <>
+struct MonitorSpace<2> {
+  using Angular = double;
+  static double zero_angular() { return 0.0; }
+};
+template <>
+struct MonitorSpace<3> {
+  using Angular = Vec3;
+  static Vec3 zero_angular() { return Vec3::Zero(); }
+};
+
+// M is the model type (Model in 2D).
+template <class M>
+class RunMonitorT {
  public:
   // `contact` is the scheme's contact set (no candidates: no contact), read at every observation:
   // its candidates' penetration, its observables, and at the end its run totals.
-  RunMonitor(const Model& model, const RunSettings& settings, RunResult& result, const ContactSet& contact);
+  RunMonitorT(const M& model, const RunSettings& settings, RunResult& result, const ContactSetT<M::kDim>& contact);
 
   long planned_steps() const { return planned_; }
   bool is_monitor_step(long n) const;
@@ -76,10 +93,10 @@ class RunMonitor {
   // The nodes' contact force, gap and status from what the contact set holds now.
   void contact_fields(const State& s, FieldSnapshot& f) const;
 
-  const Model& model_;
+  const M& model_;
   const RunSettings& settings_;
   RunResult& result_;
-  const ContactSet& contact_;
+  const ContactSetT<M::kDim>& contact_;
   long planned_ = 0;
   // Fixed step: the next history sample's step (-1: none left), made by next_sample() from
   // sample_k_; and the field snapshots' steps (a list: their number is bounded by the case).
@@ -111,5 +128,6 @@ class RunMonitor {
   std::chrono::steady_clock::time_point wall0_;
   std::clock_t cpu0_;
 };
+using RunMonitor = RunMonitorT<Model>;
 
 }  // namespace ricochet

@@ -41,8 +41,10 @@ void advance(long i0, long i1, double dt_n, double dt, double* __restrict v, dou
 
 }  // namespace
 
-State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
+template <class M>
+State initial_state(const M& model, const std::vector<PrescribedDof>& prescribed, double dt,
                     const Eigen::VectorXd& initial_displacement, const std::vector<NodalLoad>& loads) {
+  constexpr int D = M::kDim;
   const int n = model.num_dofs();
   State s;
   s.dt = dt;
@@ -54,7 +56,7 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
   s.f_ext.resize(n);
   s.force_scratch = make_force_scratch(model);
   for (int i = 0; i < model.num_nodes(); ++i)
-    s.f_ext.segment<2>(2 * i) = model.mass(2 * i) * model.gravity;
+    s.f_ext.segment<D>(D * i) = model.mass(D * i) * model.gravity;
   for (const auto& p : prescribed) {
     if (p.kind == PrescribedDof::Kind::velocity) {
       s.v_half[p.dof] = p.value;
@@ -68,8 +70,9 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
   return s;
 }
 
-void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
-              bool with_energy, const StressTracking* stress) {
+template <class M>
+void evaluate(const M& model, const std::vector<PrescribedDof>& prescribed, State& s, bool with_energy,
+              const StressTracking* stress) {
   s.forces = internal_forces(model, s.u.data(), s.v_half.data(), s.f_int.data(), with_energy, stress,
                              &s.force_scratch);
   for_dof_ranges(s, [&](long i0, long i1) {
@@ -118,5 +121,10 @@ void update(State& s) {
   s.dt_prev = dt;
   s.time = s.time_base + static_cast<double>(s.step - s.step_base) * s.dt;
 }
+
+// The instantiations: one per model type.
+template State initial_state<Model>(const Model&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
+                                    const std::vector<NodalLoad>&);
+template void evaluate<Model>(const Model&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
 
 }  // namespace ricochet

@@ -85,7 +85,9 @@ struct State {
 // Allocates the state: u_0 = initial_displacement (or 0) with prescribed displacements
 // imposed, v_0 = the model's initial velocities with prescribed velocities imposed, and the
 // nodal loads.
-State initial_state(const Model& model, const std::vector<PrescribedDof>& prescribed, double dt,
+// M is the model type (Model, 2D; its dimension M::kDim sets the DOFs per node).
+template <class M>
+State initial_state(const M& model, const std::vector<PrescribedDof>& prescribed, double dt,
                     const Eigen::VectorXd& initial_displacement = {},
                     const std::vector<NodalLoad>& loads = {});
 
@@ -96,8 +98,9 @@ State initial_state(const Model& model, const std::vector<PrescribedDof>& prescr
 // (dt_{n+1/2}): change it with set_step() before.
 // With `stress` (internal_forces()) the pass also ranks the step's stresses. The force pass is
 // the threaded one (s.force_scratch), on the OpenMP threads in force.
-void evaluate(const Model& model, const std::vector<PrescribedDof>& prescribed, State& s,
-              bool with_energy, const StressTracking* stress = nullptr);
+template <class M>
+void evaluate(const M& model, const std::vector<PrescribedDof>& prescribed, State& s, bool with_energy,
+              const StressTracking* stress = nullptr);
 
 // Phase 2: v_{n+1/2} = v_{n-1/2} + dt_n a_n, u_{n+1} = u_n + dt_{n+1/2} v_{n+1/2},
 // t_{n+1} = t_n + dt_{n+1/2}; dt_prev becomes dt.

@@ -11,7 +11,10 @@
 
 namespace ricochet {
 
-RunResult run_explicit(const Model& model, const RunSettings& settings, const ProgressFn& progress) {
+template <class M>
+RunResult run_explicit(const M& model, const RunSettings& settings, const ProgressFn& progress) {
+  constexpr int D = M::kDim;
+  const auto& obstacles = obstacles_of(settings, model);
   // The whole run, set-up included, uses the run's thread count.
   const ThreadScope threads(settings.threads);
   RunResult result;
@@ -23,15 +26,15 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   // The contact solve of the run's method; the contact set (candidates, frames, observables) is
   // the same for both.
   const bool penalty = settings.contact_method == RunSettings::ContactMethod::penalty;
-  BipotentialContact bipotential;
-  PenaltyContact springs;
+  BipotentialContactT<D> bipotential;
+  PenaltyContactT<D> springs;
   if (penalty)
-    springs = make_penalty_contact(model, settings.obstacles, settings.friction, settings.prescribed,
-                                   settings.penalty, settings.body_pairs);
+    springs = make_penalty_contact(model, obstacles, settings.friction, settings.prescribed, settings.penalty,
+                                   settings.body_pairs);
   else
-    bipotential = make_bipotential_contact(model, settings.obstacles, settings.friction, settings.prescribed,
+    bipotential = make_bipotential_contact(model, obstacles, settings.friction, settings.prescribed,
                                            settings.body_pairs);
-  const ContactSet& contact = penalty ? springs.set : bipotential.set;
+  const ContactSetT<D>& contact = penalty ? springs.set : bipotential.set;
   const bool with_contact = !contact.candidates.empty();
   // A quasi-static start (relaxation.hpp): the scene relaxed under its t = 0 loads with this
   // scheme's steps and contact, then the clock starts from there.
@@ -41,10 +44,10 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
       relax_explicit_start(model, settings,
                            {with_contact && !penalty ? &bipotential : nullptr, with_contact && penalty ? &springs : nullptr},
                            s, result.relaxation);
-  RunMonitor monitor(model, settings, result, contact);
+  RunMonitorT<M> monitor(model, settings, result, contact);
   // The variable step (settings.dt_update_interval > 0; time_step.hpp): the springs' limit
   // enters it as it entered the first step.
-  StepControl steps(model, settings,
+  StepControlT<M> steps(model, settings,
                     penalty ? penalty_critical_dt(model, springs) : std::numeric_limits<double>::infinity());
   if (!relaxed_ok) {
     monitor.diverge(s, "relaxation: " + result.relaxation.reason);
@@ -89,13 +92,13 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
     }
     if (tracking) monitor.track_stress(s, s.forces.stress);
     if (penalty) {
-      if (with_contact) penalty_phase(model, settings.obstacles, springs, s);
+      if (with_contact) penalty_phase(model, obstacles, springs, s);
       if (observe && !observe_row(n)) break;
       if (monitor.is_last_step(n)) break;
     } else {
       if (observe && !observe_row(n)) break;
       if (monitor.is_last_step(n)) break;
-      if (with_contact) contact_phase(model, settings.obstacles, settings.contact, bipotential, s);
+      if (with_contact) contact_phase(model, obstacles, settings.contact, bipotential, s);
     }
     // Its forces act over [t_n, t_n+1] and change the velocity over dt_n.
     if (with_contact) monitor.contact_step(s.time, s.dt, velocity_step(s));
@@ -105,5 +108,7 @@ RunResult run_explicit(const Model& model, const RunSettings& settings, const Pr
   steps.report(result);
   return result;
 }
+
+template RunResult run_explicit<Model>(const Model&, const RunSettings&, const ProgressFn&);
 
 }  // namespace ricochet

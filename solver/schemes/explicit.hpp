@@ -6,7 +6,8 @@
 
 namespace ricochet {
 
-RunResult run_explicit(const Model& model, const RunSettings& settings,
-                       const ProgressFn& progress = {});
+// M is the model type (Model: 2D), instantiated in explicit.cpp.
+template <class M>
+RunResult run_explicit(const M& model, const RunSettings& settings, const ProgressFn& progress = {});
 
 }  // namespace ricochet

@@ -28,34 +28,40 @@ std::vector<NodalLoad> loads_at_start(const std::vector<NodalLoad>& loads) {
   return out;
 }
 
-// Largest node displacement between two displacement vectors [m].
+// Largest node displacement between two displacement vectors of D DOFs per node [m].
+template <int D>
 double largest_move(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   double d = 0.0;
-  for (Eigen::Index i = 0; i + 1 < a.size(); i += 2) d = std::max(d, (a.segment<2>(i) - b.segment<2>(i)).squaredNorm());
+  for (Eigen::Index i = 0; i + D - 1 < a.size(); i += D)
+    d = std::max(d, (a.segment<D>(i) - b.segment<D>(i)).squaredNorm());
   return std::sqrt(d);
 }
 
 // Runs a relaxation to its end; the report with its wall time and settlement.
-bool run_relaxation(Relaxation& r, const Eigen::VectorXd& u_start, RelaxationReport& report) {
+template <class M>
+bool run_relaxation(RelaxationT<M>& r, const Eigen::VectorXd& u_start, RelaxationReport& report) {
+  using Status = typename RelaxationT<M>::Status;
   const auto t0 = std::chrono::steady_clock::now();
-  Relaxation::Status status;
+  Status status;
   do status = r.step();
-  while (status == Relaxation::Status::running);
+  while (status == Status::running);
   report = r.report();
   report.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  report.settlement = largest_move(r.state().u, u_start);
+  report.settlement = largest_move<M::kDim>(r.state().u, u_start);
   return status == Relaxation::Status::converged;
 }
 
 }  // namespace
 
-double relaxation_step(const Model& model, const RunSettings& settings, bool implicit) {
+template <class M>
+double relaxation_step(const M& model, const RunSettings& settings, bool implicit) {
   if (settings.relaxation.dt > 0.0) return settings.relaxation.dt;
   return kRelaxationStepFactor * (implicit ? 0.9 * model.critical_dt : settings.dt);
 }
 
-Relaxation::Relaxation(const Model& model, const RunSettings& settings, double dt, const Eigen::VectorXd& u_start,
-                       RelaxationContact contact)
+template <class M>
+RelaxationT<M>::RelaxationT(const M& model, const RunSettings& settings, double dt, const Eigen::VectorXd& u_start,
+                            RelaxationContactT<M::kDim> contact)
     : model_(model), settings_(settings), contact_(contact) {
   held_ = held_dofs(settings.prescribed, u_start);
   fixed_.assign(model.num_dofs(), 0);
@@ -69,14 +75,16 @@ Relaxation::Relaxation(const Model& model, const RunSettings& settings, double d
   report_.dt = dt;
 }
 
-void Relaxation::contact() {
+template <class M>
+void RelaxationT<M>::contact() {
   if (contact_.bipotential)
-    contact_phase(model_, settings_.obstacles, settings_.contact, *contact_.bipotential, s_);
+    contact_phase(model_, obstacles_of(settings_, model_), settings_.contact, *contact_.bipotential, s_);
   else if (contact_.penalty)
-    penalty_phase(model_, settings_.obstacles, *contact_.penalty, s_);
+    penalty_phase(model_, obstacles_of(settings_, model_), *contact_.penalty, s_);
 }
 
-Relaxation::Status Relaxation::step() {
+template <class M>
+typename RelaxationT<M>::Status RelaxationT<M>::step() {
   evaluate(model_, held_, s_, false);
   contact();
   if (!(s_.forces.min_jacobian > 0.0)) {
@@ -135,17 +143,19 @@ Relaxation::Status Relaxation::step() {
   return Status::running;
 }
 
-bool relax_explicit_start(const Model& model, const RunSettings& settings, RelaxationContact contact, State& s,
+template <class M>
+bool relax_explicit_start(const M& model, const RunSettings& settings, RelaxationContactT<M::kDim> contact, State& s,
                           RelaxationReport& report) {
+  constexpr int D = M::kDim;
   const Eigen::VectorXd u_start = s.u;
   bool converged;
   {
-    Relaxation r(model, settings, relaxation_step(model, settings, false), u_start, contact);
+    RelaxationT<M> r(model, settings, relaxation_step(model, settings, false), u_start, contact);
     converged = run_relaxation(r, u_start, report);
     s = initial_state(model, settings.prescribed, settings.dt, r.state().u, settings.loads);
   }
-  for (ContactSet* c : {contact.bipotential ? &contact.bipotential->set : nullptr,
-                        contact.penalty ? &contact.penalty->set : nullptr}) {
+  for (ContactSetT<D>* c : {contact.bipotential ? &contact.bipotential->set : nullptr,
+                            contact.penalty ? &contact.penalty->set : nullptr}) {
     if (!c) continue;
     // The first step reconstructs v_{-1/2} = v_0 - dt/2 a_0 from the free acceleration
     // (evaluate()), which does not see the contact forces that hold the relaxed state: v_0 is
@@ -153,11 +163,10 @@ bool relax_explicit_start(const Model& model, const RunSettings& settings, Relax
     // dt/2 M^-1 (f_ext - f_int + R), ~v_0 at equilibrium. Otherwise the loaded penalty springs
     // would kick the contact nodes by dt/2 M^-1 R at the first step.
     for (int k : c->active) {
-      const Vec2 n = c->normal[k], t{n.y(), -n.x()};
-      const Vec2 force = c->reaction[k].n * n + c->reaction[k].t * t;
-      const Stencil& st = c->stencil[k];
+      const VecD<D> force = ContactFrame<D>(c->normal[k]).global(c->reaction[k]);
+      const auto& st = c->stencil[k];
       for (int j = 0; j < st.count; ++j)
-        s.v_half.segment<2>(2 * st.node[j]) -= 0.5 * s.dt * st.coef[j] * force * model.inv_mass[2 * st.node[j]];
+        s.v_half.segment<D>(D * st.node[j]) -= 0.5 * s.dt * st.coef[j] * force * model.inv_mass[D * st.node[j]];
     }
     // The contacts keep their state; what they measured belongs to the relaxation.
     c->total = ContactTotals{};
@@ -166,21 +175,31 @@ bool relax_explicit_start(const Model& model, const RunSettings& settings, Relax
   return converged;
 }
 
-bool relax_displacement(const Model& model, const RunSettings& settings, Eigen::VectorXd& u,
+template <class M>
+bool relax_displacement(const M& model, const RunSettings& settings, Eigen::VectorXd& u,
                         RelaxationReport& report) {
+  constexpr int D = M::kDim;
   const double dt = relaxation_step(model, settings, true);
   const Eigen::VectorXd u_start = initial_state(model, settings.prescribed, dt, settings.initial_displacement).u;
-  BipotentialContact bipotential;
-  RelaxationContact contact;
-  if (!settings.obstacles.empty() || !settings.body_pairs.empty()) {
-    bipotential = make_bipotential_contact(model, settings.obstacles, settings.friction, settings.prescribed,
+  BipotentialContactT<D> bipotential;
+  RelaxationContactT<D> contact;
+  const auto& obstacles = obstacles_of(settings, model);
+  if (!obstacles.empty() || !settings.body_pairs.empty()) {
+    bipotential = make_bipotential_contact(model, obstacles, settings.friction, settings.prescribed,
                                            settings.body_pairs);
     if (!bipotential.set.candidates.empty()) contact.bipotential = &bipotential;
   }
-  Relaxation r(model, settings, dt, u_start, contact);
+  RelaxationT<M> r(model, settings, dt, u_start, contact);
   const bool converged = run_relaxation(r, u_start, report);
   u = r.state().u;
   return converged;
 }
+
+// The instantiations: one per model type.
+template double relaxation_step<Model>(const Model&, const RunSettings&, bool);
+template class RelaxationT<Model>;
+template bool relax_explicit_start<Model>(const Model&, const RunSettings&, RelaxationContactT<2>, State&,
+                                          RelaxationReport&);
+template bool relax_displacement<Model>(const Model&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
 
 }  // namespace ricochet

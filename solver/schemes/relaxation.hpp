@@ -41,23 +41,26 @@ inline constexpr double kRelaxationStepFactor = 0.5;
 
 // The relaxation's step [s]: settings.relaxation.dt if > 0, else kRelaxationStepFactor x the
 // run's step (explicit schemes) or x 0.9 x the elements' critical step (implicit scheme).
-double relaxation_step(const Model& model, const RunSettings& settings, bool implicit);
+template <class M>
+double relaxation_step(const M& model, const RunSettings& settings, bool implicit);
 
 // The contact treatment a relaxation steps with: the run's own (at most one; none without
 // contact candidates).
-struct RelaxationContact {
-  BipotentialContact* bipotential = nullptr;
-  PenaltyContact* penalty = nullptr;
+template <int D>
+struct RelaxationContactT {
+  BipotentialContactT<D>* bipotential = nullptr;
+  PenaltyContactT<D>* penalty = nullptr;
 };
 
-class Relaxation {
+template <class M>
+class RelaxationT {
  public:
   enum class Status { running, converged, failed };
 
   // Set-up (allocates): the relaxation's state at the displacement u_start (the run's t = 0
   // displacement), at rest, with the prescribed DOFs held and the loads at their t = 0 value.
-  Relaxation(const Model& model, const RunSettings& settings, double dt, const Eigen::VectorXd& u_start,
-             RelaxationContact contact);
+  RelaxationT(const M& model, const RunSettings& settings, double dt, const Eigen::VectorXd& u_start,
+              RelaxationContactT<M::kDim> contact);
 
   // One relaxation step: evaluate() and the contact solve at u_n, the convergence test; unless
   // converged, update() and the kinetic damping. failed: an inverted element, a non-finite
@@ -70,9 +73,9 @@ class Relaxation {
  private:
   void contact();
 
-  const Model& model_;
+  const M& model_;
   const RunSettings& settings_;
-  RelaxationContact contact_;
+  RelaxationContactT<M::kDim> contact_;
   std::vector<PrescribedDof> held_;  // the prescribed DOFs, held at their t = 0 value
   std::vector<unsigned char> fixed_;  // per DOF: prescribed
   State s_;
@@ -90,7 +93,8 @@ class Relaxation {
 // forces in a_0), and the contact sets keep their reactions, statuses and penalty springs, with
 // their observables reset. Returns false when the relaxation did not converge (report.reason);
 // s is then the initial state at its last iterate.
-bool relax_explicit_start(const Model& model, const RunSettings& settings, RelaxationContact contact,
+template <class M>
+bool relax_explicit_start(const M& model, const RunSettings& settings, RelaxationContactT<M::kDim> contact,
                           State& s, RelaxationReport& report);
 
 // The implicit scheme: relaxes with the semi-explicit loop (central differences and the same
@@ -99,7 +103,11 @@ bool relax_explicit_start(const Model& model, const RunSettings& settings, Relax
 // not depend on the integrator that reached it: at u with v = 0 and f_int(u) = f_ext + R, R in
 // the Coulomb cone and the contacts closed, the implicit step's solution is v1 = 0 with the
 // same R. Returns false when it did not converge (report.reason); u is then its last iterate.
-bool relax_displacement(const Model& model, const RunSettings& settings, Eigen::VectorXd& u,
+template <class M>
+bool relax_displacement(const M& model, const RunSettings& settings, Eigen::VectorXd& u,
                         RelaxationReport& report);
+
+using RelaxationContact = RelaxationContactT<2>;
+using Relaxation = RelaxationT<Model>;
 
 }  // namespace ricochet

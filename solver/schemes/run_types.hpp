@@ -91,13 +91,18 @@ struct RunSettings {
   PenaltySettings penalty;
 };
 
+// The rigid obstacles of a run, of the model type's dimension (2D: RunSettings::obstacles).
+inline const std::vector<Obstacle>& obstacles_of(const RunSettings& s, const Model&) { return s.obstacles; }
+
 enum class RunStatus { ok, diverged };
 
 // History columns, in order; then per contact interface (contact_interface_names(), when the
 // run has contact candidates) <name>_normal_force, _tangential_force, _contact_nodes,
-// _contact_work, _friction_dissipation; then per probe <name>_ux, _uy, _vx, _vy.
+// _contact_work, _friction_dissipation; then per probe <name>_ux, _uy, _vx, _vy (in 3D _ux,
+// _uy, _uz, _vx, _vy, _vz). `dimension` 2 or 3 (3D: momentum_z, and angular_momentum_x, _y,
+// _z in place of angular_momentum).
 std::vector<std::string> history_columns(const std::vector<Probe>& probes,
-                                         const std::vector<std::string>& interfaces = {});
+                                         const std::vector<std::string>& interfaces = {}, int dimension = 2);
 
 struct History {
   std::vector<std::string> columns;
@@ -131,6 +136,7 @@ struct StressPeak {
   int body = -1;          // index of the body
   int element = -1;       // index of the cell within its body (its quads, then its triangles)
   double x = 0.0, y = 0.0;  // the cell's centroid at that time (mean of its current nodes) [m]
+  double z = 0.0;           // 3D: its z (0 in 2D) [m]
 };
 
 struct RunResult {

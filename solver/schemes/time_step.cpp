@@ -15,11 +15,13 @@
 
 namespace ricochet {
 
-double critical_time_step(const Model& model, const RunSettings& settings, double* penalty_critical) {
-  const bool contact = !settings.obstacles.empty() || !settings.body_pairs.empty();
+template <class M>
+double critical_time_step(const M& model, const RunSettings& settings, double* penalty_critical) {
+  const auto& obstacles = obstacles_of(settings, model);
+  const bool contact = !obstacles.empty() || !settings.body_pairs.empty();
   if (settings.contact_method != RunSettings::ContactMethod::penalty || !contact) return model.critical_dt;
-  const PenaltyContact springs = make_penalty_contact(model, settings.obstacles, settings.friction,
-                                                      settings.prescribed, settings.penalty, settings.body_pairs);
+  const PenaltyContactT<M::kDim> springs = make_penalty_contact(model, obstacles, settings.friction,
+                                                                settings.prescribed, settings.penalty, settings.body_pairs);
   if (penalty_critical) *penalty_critical = penalty_critical_dt(model, springs);
   return penalty_combined_critical_dt(model, springs);
 }
@@ -38,7 +40,8 @@ constexpr double kEndTolerance = 1e-9;
 
 }  // namespace
 
-StepControl::StepControl(const Model& model, const RunSettings& settings, double spring_critical_dt)
+template <class M>
+StepControlT<M>::StepControlT(const M& model, const RunSettings& settings, double spring_critical_dt)
     : model_(model),
       interval_(settings.dt_update_interval),
       safety_(settings.dt_safety),
@@ -52,9 +55,11 @@ StepControl::StepControl(const Model& model, const RunSettings& settings, double
   if (interval_ > 0 && !(safety_ > 0.0 && settings.dt_min_ratio > 0.0 && settings.dt_min_ratio <= 1.0))
     throw std::invalid_argument("run: a variable step needs dt_safety > 0 and dt_min_ratio in (0, 1]");
   planned_ = steps_to(0.0, end_, dt0_);
-  for (const auto& b : model.q4_hourglass) wave_speed_[0].push_back(material_wave_speed(b.material));
-  for (const auto& b : model.q4_full) wave_speed_[1].push_back(material_wave_speed(b.material));
-  for (const auto& b : model.t3) wave_speed_[2].push_back(material_wave_speed(b.material));
+  if constexpr (M::kDim == 2) {
+    for (const auto& b : model.q4_hourglass) wave_speed_[0].push_back(material_wave_speed(b.material));
+    for (const auto& b : model.q4_full) wave_speed_[1].push_back(material_wave_speed(b.material));
+    for (const auto& b : model.t3) wave_speed_[2].push_back(material_wave_speed(b.material));
+  }
   for (int k = 0; k < 3; ++k)
     for (double c : wave_speed_[k]) inv_c2_[k].push_back(1.0 / (c * c));
   position_.assign(model.num_dofs(), 0.0);
@@ -127,7 +132,9 @@ void smallest_in(const T3Block& b, int e0, int e1, double inv_c2, const double* 
 
 }  // namespace
 
-double StepControl::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
+// The 2D model's cells. (Each model type has its own: the squared forms are the cell types'.)
+template <>
+double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
   // The smallest cell in squared form over every block (no square root per quad), then its
   // step from the same functions as model.critical_dt, so that the undeformed configuration
   // gives model.critical_dt bit for bit. On the run's threads when asked: each takes a share
@@ -228,7 +235,8 @@ double StepControl::critical(const Eigen::VectorXd& u, int* cell, bool parallel)
   return combined_critical_dt(dt_e, spring_dt_);
 }
 
-bool StepControl::begin_step(State& s) {
+template <class M>
+bool StepControlT<M>::begin_step(State& s) {
   if (landed_ || end_ - s.time <= kEndTolerance * s.dt) {
     s.time = end_;
     return false;
@@ -247,7 +255,7 @@ bool StepControl::begin_step(State& s) {
       // The cell that sets the step: its body and its index within the body.
       int body = 0;
       while (body + 1 < static_cast<int>(model_.bodies.size()) && model_.bodies[body + 1].first_cell <= cell) ++body;
-      const BodyInfo* b = model_.bodies.empty() ? nullptr : &model_.bodies[body];
+      const auto* b = model_.bodies.empty() ? nullptr : &model_.bodies[body];
       char buf[400];
       std::snprintf(buf, sizeof buf,
                     "time step floor: the recomputed step %.4g s is below %.4g s, time.dt_min_ratio = %g x the "
@@ -266,12 +274,17 @@ bool StepControl::begin_step(State& s) {
   return true;
 }
 
-void StepControl::report(RunResult& r) const {
+template <class M>
+void StepControlT<M>::report(RunResult& r) const {
   r.dt_update_interval = interval_;
   r.dt_min = dt_min_ <= dt_max_ ? dt_min_ : dt0_;
   r.dt_max = dt_min_ <= dt_max_ ? dt_max_ : dt0_;
   r.dt_updates = updates_;
   r.dt_floor = interval_ > 0 ? floor_ : 0.0;
 }
+
+// The instantiations: one per model type.
+template double critical_time_step<Model>(const Model&, const RunSettings&, double*);
+template class StepControlT<Model>;
 
 }  // namespace ricochet

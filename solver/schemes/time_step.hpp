@@ -19,7 +19,8 @@ namespace ricochet {
 // contact, `penalty_critical_dt` (if not null) receives the springs' own limit dt_p (+infinity
 // without springs); it is left alone otherwise. Penalty springs of `settings.penalty.soft`
 // depend on settings.penalty.soft_dt, which must be set.
-double critical_time_step(const Model& model, const RunSettings& settings, double* penalty_critical_dt = nullptr);
+template <class M>
+double critical_time_step(const M& model, const RunSettings& settings, double* penalty_critical_dt = nullptr);
 
 // The variable time step of the explicit loop (RunSettings::dt_update_interval = N > 0). At the
 // top of step n, before evaluate(): when t_n has reached end_time the run is over; otherwise,
@@ -34,9 +35,10 @@ double critical_time_step(const Model& model, const RunSettings& settings, doubl
 // dt_min_ratio x the initial step (or a cell with L_e <= 0) is a failure the loop reports as a
 // divergence. With N = 0 it leaves the step alone and only ends the run after ceil(end/dt)
 // steps, as the fixed-step loop does. Allocates nothing after construction.
-class StepControl {
+template <class M>
+class StepControlT {
  public:
-  StepControl(const Model& model, const RunSettings& settings, double spring_critical_dt);
+  StepControlT(const M& model, const RunSettings& settings, double spring_critical_dt);
 
   bool variable() const { return interval_ > 0; }
 
@@ -62,7 +64,7 @@ class StepControl {
   void report(RunResult& r) const;
 
  private:
-  const Model& model_;
+  const M& model_;
   int interval_ = 0;
   double safety_ = 0.9, end_ = 0.0, dt0_ = 0.0, floor_ = 0.0;
   double spring_dt_ = 0.0;
@@ -74,5 +76,9 @@ class StepControl {
   bool landed_ = false;  // the step just taken was shortened to end on end_time
   std::string failure_;
 };
+
+template <>
+double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
+using StepControl = StepControlT<Model>;
 
 }  // namespace ricochet
