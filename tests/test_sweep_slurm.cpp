@@ -234,7 +234,8 @@ SlurmJobs sample_jobs(const fs::path& dir) {
 // ---- the scripts -------------------------------------------------------------------------------
 
 // The array script: one task per shard (1 ... N), one CPU per thread of each of the shard's
-// --jobs runs, its log in DIR/slurm/ (% doubled, in double quotes), the --slurm-option values
+// --jobs runs, its log in DIR/slurm/ (% doubled, in double quotes; appended to when Slurm
+// requeues the task), the --slurm-option values
 // last (so that they override ours, --array included), and the shard command with every option
 // of the submitting command; the merge script: one CPU, no --array option, the merge with
 // --repeat and --check. Every path in single quotes.
@@ -252,6 +253,7 @@ TEST_F(SweepSlurmTest, TheScriptsHoldTheShardAndMergeCommandsAndTheOptions) {
                                                "--ntasks=1",
                                                "--cpus-per-task=6",
                                                "--output=\"" + (dir_ / "results/it's 100%%/slurm/shard-%a-%A.out").string() + "\"",
+                                               "--open-mode=append",
                                                "--partition=short",
                                                "--time=0:30:00",
                                                "--array=2",
@@ -270,6 +272,7 @@ TEST_F(SweepSlurmTest, TheScriptsHoldTheShardAndMergeCommandsAndTheOptions) {
                                                "--ntasks=1",
                                                "--cpus-per-task=1",
                                                "--output=\"" + (dir_ / "results/it's 100%%/slurm/merge-%j.out").string() + "\"",
+                                               "--open-mode=append",
                                                "--partition=short",
                                                "--time=0:30:00",
                                                "--account=proj 1"};

@@ -144,6 +144,7 @@ SlurmScripts slurm_scripts(const SlurmJobs& j) {
   // whatever node) there is no count to ask for: the --slurm-option values decide.
   if (j.threads > 0) a += "#SBATCH --cpus-per-task=" + std::to_string(j.jobs * j.threads) + "\n";
   a += "#SBATCH --output=" + sbatch_log(j.slurm_dir(), "shard-%a-%A.out") + "\n";
+  a += "#SBATCH --open-mode=append\n";  // a task that Slurm requeues (preemption) adds to its log
   a += user_lines(j, true);
   a += "set -eu\n";
   a += cd;
@@ -162,6 +163,7 @@ SlurmScripts slurm_scripts(const SlurmJobs& j) {
   m += "#SBATCH --ntasks=1\n";
   m += "#SBATCH --cpus-per-task=1\n";
   m += "#SBATCH --output=" + sbatch_log(j.slurm_dir(), "merge-%j.out") + "\n";
+  m += "#SBATCH --open-mode=append\n";
   m += user_lines(j, false);
   m += "set -eu\n";
   m += cd;
