@@ -8,7 +8,10 @@
         (TIMING below). Exit 1 on any difference, listing at most 20.
     slurm_check.py running DIR K N
         If shard K of N has finished at least one run and is now running another (its run
-        folder's run.lock held, no summary.json), prints that run's id; else nothing.
+        folder's run.lock held, no summary.json) that started at least MIN_AGE seconds ago,
+        prints that run's id; else nothing. The age (from its overrides.json, written as the run
+        starts) keeps the runs of a few tenths of a second out: one of them could end between
+        this answer and the kill that follows it.
     slurm_check.py pid DIR K N
         The pid in DIR/shards/K-of-N/shard.json (the shard process).
     slurm_check.py interrupted DIR RUN_ID
@@ -36,6 +39,9 @@ import hashlib
 import json
 import os
 import sys
+import time
+
+MIN_AGE = 0.5  # s
 
 # Columns that measure the machine and the moment, not the results (docs/sweeps.md, summary.csv;
 # docs/outputs.md): compared by name, or by the last part of a flattened name
@@ -126,8 +132,14 @@ def running(out, k, n):
     ids = m.get("runs", [])
     done = [i for i in ids if os.path.exists(os.path.join(out, "runs", i, "summary.json"))]
     busy = [i for i in ids if i not in done and held(os.path.join(out, "runs", i, "run.lock"))]
-    if done and busy:
-        print(busy[0])
+    for i in busy if done else []:
+        try:
+            age = time.time() - os.stat(os.path.join(out, "runs", i, "overrides.json")).st_mtime
+        except FileNotFoundError:
+            continue
+        if age >= MIN_AGE:
+            print(i)
+            break
     return 0
 
 
