@@ -2,14 +2,12 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
-#include <cstring>
 #include <ostream>
 #include <stdexcept>
 #include <system_error>
@@ -61,6 +59,7 @@ std::string job_id(const std::string& answer) {
   return id;
 }
 
+// The scripts' heading comments: what they run, and how `--slurm` submits them.
 std::string array_comment(const SlurmJobs& j) {
   return "# Shard K of " + std::to_string(j.shards) + " of the sweep " + j.sweep_name +
          ", K = the array task id (docs/sweeps.md, \"Running on a\n"
