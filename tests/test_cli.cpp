@@ -526,7 +526,9 @@ TEST_F(CliTest, RelaxationIsReported) {
 TEST_F(CliTest, EveryCommandAnswersHelp) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> commands = {
       {"run", {"--set", "--threads", "--out", "--quiet"}},
-      {"sweep", {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet", "--shard", "--merge"}},
+      {"sweep",
+       {"--out", "--jobs", "--threads", "--repeat", "--check", "--force", "--quiet", "--shard", "--merge", "--slurm", "--shards",
+        "--slurm-option", "--dry-run"}},
       {"check", {"--junit"}},
       {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
       {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},

@@ -15,6 +15,7 @@
 #include "harness/stability/stability.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_shard.hpp"
+#include "harness/sweeps/sweep_slurm.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -75,8 +76,8 @@ class CommandLine {
     run_->add_flag("-q,--quiet", run_cmd_.quiet, "no progress and no summary line");
 
     sweep_ = command("sweep", "run every case of a sweep file (docs/sweeps.md); writes DIR/summary.csv, DIR/sweep.json, DIR/runs/",
-                     "exit status: 0 done (diverged and failed runs are results), 4 a gate failed, 3 with --merge: runs missing, "
-                     "2 bad input, 1 other error");
+                     "exit status: 0 done (diverged and failed runs are results; with --slurm: submitted), 4 a gate failed, "
+                     "3 with --merge: runs missing, 2 bad input, 1 other error (with --slurm: sbatch missing or failed)");
     sweep_->add_option("SWEEP.toml", sweep_cmd_.file, "the sweep file");
     sweep_out_ = sweep_->add_option("--out", out_dir_, "output folder (default: results/<sweep name>)")->type_name("DIR");
     jobs_ = sweep_->add_option("-j,--jobs", jobs_text_,
@@ -100,6 +101,21 @@ class CommandLine {
     merge_ = sweep_->add_flag("--merge", sweep_cmd_.merge,
                               "run nothing: build DIR/summary.csv and DIR/sweep.json from the shards' run folders; "
                               "exit 3 if runs are missing");
+    slurm_ = sweep_->add_flag("--slurm", sweep_cmd_.slurm,
+                              "submit the sweep to Slurm: a job array of N shards (--shards) and a merge job after them "
+                              "(with --check, the gates); prints the job ids; submitted again, it resumes");
+    shards_ = sweep_->add_option("--shards", shards_text_,
+                                 "with --slurm: the number of shards, one array task each, 1 ... " + std::to_string(kMaxShards) +
+                                     " (default: one per run, at most " + std::to_string(kDefaultMaxSlurmShards) + ")")
+                  ->type_name("N");
+    sweep_->add_option("--slurm-option", sweep_cmd_.slurm_options,
+                       "with --slurm: an #SBATCH option of both jobs (--array: of the array only), e.g. "
+                       "--slurm-option --partition=NAME --slurm-option --time=2:00:00 (repeatable)")
+        ->type_name("OPTION")
+        ->expected(1)
+        ->take_all();
+    sweep_->add_flag("--dry-run", sweep_cmd_.dry_run,
+                     "with --slurm: print the two sbatch scripts; write and submit nothing (needs no Slurm)");
 
     check_ = command("check", "check the gates of GATES.toml (docs/gates.md) on the sweep table SUMMARY.csv",
                      "exit status: 0 all gates pass, 4 a gate failed, 2 bad input, 1 other error");
@@ -169,6 +185,11 @@ class CommandLine {
       return run_command(run_cmd_);
     }
     if (&c == sweep_) {
+      if (slurm_->count() && (merge_->count() || shard_->count()))
+        throw InputError(std::string("ricochet sweep: --slurm submits the shards and the merge itself: not with ") +
+                         (merge_->count() ? "--merge" : "--shard"));
+      if (shards_->count())
+        sweep_cmd_.shards = static_cast<int>(parse_integer("sweep", "--shards", shards_text_, 1, kMaxShards));
       if (merge_->count()) {
         if (shard_->count())
           throw InputError("ricochet sweep: --shard and --merge exclude each other: run each shard with --shard K/N, "
@@ -270,7 +291,8 @@ class CommandLine {
     std::string what = e.what();
     std::replace(what.begin(), what.end(), '\n', ' ');
     if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && what.rfind("-", 0) == 0 && what.find(" required ") != std::string::npos)
-      return prefix + what.substr(0, what.find(':')) + " needs a value";
+      return prefix + what.substr(0, what.find(':')) + " needs a value" +
+             (what.rfind("--slurm-option", 0) == 0 ? " (an sbatch option, e.g. --slurm-option --time=2:00:00)" : "");
     return prefix + what;
   }
 
@@ -279,6 +301,7 @@ class CommandLine {
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
   CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr, *force_ = nullptr, *shard_ = nullptr, *merge_ = nullptr;
+  CLI::Option *slurm_ = nullptr, *shards_ = nullptr;
   CLI::Option *run_out_ = nullptr, *sweep_out_ = nullptr, *stability_out_ = nullptr;
   CLI::Option *run_threads_ = nullptr, *sweep_threads_ = nullptr, *stability_threads_ = nullptr;
   CLI::Option *tolerance_ = nullptr, *max_runs_ = nullptr, *end_ = nullptr, *energy_bound_ = nullptr;
@@ -288,6 +311,7 @@ class CommandLine {
   StabilityCommand stability_cmd_;
   std::string out_dir_;  // sweep --out
   std::string shard_text_;  // sweep --shard K/N
+  std::string shards_text_;  // sweep --shards N
   std::string jobs_text_, repeat_text_, tolerance_text_, max_runs_text_, end_text_, energy_bound_text_;
   std::string run_threads_text_, sweep_threads_text_, stability_threads_text_;
 };

@@ -39,7 +39,9 @@ Mesh3 make_box(const BoxSpec& spec) {
   const char* names[3] = {"nx", "ny", "nz"};
   for (int a = 0; a < 3; ++a)
     if (n[a] < 1) fail(std::string("box: ") + names[a] + " must be >= 1 (got " + std::to_string(n[a]) + ")");
-  const long long nodes_ll = (spec.nx + 1LL) * (spec.ny + 1LL) * (spec.nz + 1LL);
+  // Checked product by product: three factors up to 2^31 overflow 64 bits, two do not.
+  const long long nodes_xy = (spec.nx + 1LL) * (spec.ny + 1LL);
+  const long long nodes_ll = nodes_xy > max_nodes ? max_nodes + 1LL : nodes_xy * (spec.nz + 1LL);
   if (nodes_ll > max_nodes)
     fail("box: (nx+1)*(ny+1)*(nz+1) must be <= " + std::to_string(max_nodes) + " nodes (got nx " +
          std::to_string(spec.nx) + ", ny " + std::to_string(spec.ny) + ", nz " + std::to_string(spec.nz) + ")");

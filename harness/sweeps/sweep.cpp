@@ -20,6 +20,7 @@
 #include "harness/outputs/run_outputs.hpp"
 #include "harness/sweeps/sweep_exec.hpp"
 #include "harness/sweeps/sweep_shard.hpp"
+#include "harness/sweeps/sweep_slurm.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {
@@ -346,6 +347,15 @@ int run_command(const SweepCommand& c, std::ostream& out) {
   SweepOptions opt = c.options;
   if (opt.out_dir.empty()) opt.out_dir = fs::path("results") / spec.name;
   const std::vector<SweepRun> runs = expand(spec);
+  if (c.slurm) {
+    // Everything the tasks would find wrong is found here, before anything is submitted.
+    check_runs(spec, runs);
+    if (!c.gates_file.empty()) read_gates(c.gates_file);
+    if (const std::string problem = output_folder_problem(opt.out_dir); !problem.empty())
+      throw InputError("ricochet sweep: --out " + opt.out_dir.string() + ": " + problem);
+    return slurm_command(c, spec.name, runs.size(), opt.out_dir, out);
+  }
+  check_no_slurm_options(c);
   // A shard's table is a part of the sweep's, without its errors: the gates are the merge's.
   if (opt.shard && !c.gates_file.empty())
     throw InputError("ricochet sweep: --check checks the whole sweep's table: give it to --merge, not to a shard (--shard)");

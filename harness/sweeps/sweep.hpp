@@ -66,19 +66,25 @@ struct SweepOutcome {
 };
 
 // `ricochet sweep SWEEP.toml [--out DIR] [--jobs N] [--threads N] [--repeat K] [--check GATES.toml]
-// [--force] [--quiet] [--shard K/N | --merge]`.
+// [--force] [--quiet] [--shard K/N | --merge | --slurm [--shards N] [--slurm-option OPT]... [--dry-run]]`.
 struct SweepCommand {
   std::string file;        // SWEEP.toml
   std::string gates_file;  // --check GATES.toml; empty: no check
   SweepOptions options;    // an empty out_dir: results/<sweep name>
   bool merge = false;      // --merge: merge the shards' run folders (sweep_shard.hpp), run nothing
+  // --slurm: submit the shards as a Slurm job array and the merge after them (sweep_slurm.hpp).
+  bool slurm = false;
+  std::optional<int> shards;               // --shards N: the array's tasks (default: one per run, at most 1000)
+  std::vector<std::string> slurm_options;  // --slurm-option OPT: raw #SBATCH options, in order
+  bool dry_run = false;                    // --dry-run: print the scripts, write and submit nothing
 };
 
 // Reads the sweep file (and the gate file, before any run), runs the sweep (or its shard, or
 // merges it) and, with a gate file, checks its gates on DIR/summary.csv (lines on `out`, report
 // DIR/gates-junit.xml). Returns 0 the sweep (shard) completed (diverged and failed runs are
 // results) and every gate passed; 4 a gate failed (gates.hpp); with --merge, 3 runs are missing
-// (merge_command). Throws InputError for bad input (nothing written).
+// (merge_command). With --slurm it only checks the sweep and submits it (slurm_command), 0.
+// Throws InputError for bad input (nothing written).
 int run_command(const SweepCommand& c, std::ostream& out);
 
 // What a sweep.json says about the invocation that wrote it (the keys before `runs`).

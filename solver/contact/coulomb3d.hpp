@@ -116,6 +116,36 @@ inline LocalPair3d closed_form_reaction_3d(const LocalPair3d& x_free, double w, 
   return {rn, (mu * rn) * direction};
 }
 
+// The same functions without the `_3d` suffix, overloaded on LocalPair3d, so that code templated
+// over the dimension calls project_coulomb(r, mu), bipotential_update(r, x, w, mu, rho), ... for a
+// 2D LocalPair (coulomb.hpp) and a 3D LocalPair3d alike. Each forwards to its `_3d` function, so
+// the results are those bit for bit (tests/test_obstacles3.cpp). No call of the 2D functions
+// changes: a braced pair such as {1.0, 0.3} cannot initialize a LocalPair3d (its tangential part,
+// an Eigen vector, has no implicit conversion from a number), so it still picks the 2D overload.
+// Only an empty {} would fit both: write LocalPair{} or LocalPair3d{} there.
+inline LocalPair3d project_coulomb(const LocalPair3d& r, double mu) { return project_coulomb_3d(r, mu); }
+inline ContactStatus classify(const LocalPair3d& r, double mu) { return classify_3d(r, mu); }
+inline LocalPair3d bipotential_correct(const LocalPair3d& r, const LocalPair3d& x, double mu, double rho) {
+  return bipotential_correct_3d(r, x, mu, rho);
+}
+inline LocalPair3d bipotential_update(const LocalPair3d& r, const LocalPair3d& x_free, double w, double mu,
+                                      double rho) {
+  return bipotential_update_3d(r, x_free, w, mu, rho);
+}
+inline LocalSolution3d solve_local(const LocalPair3d& x_free, double w, double mu, double rho, const LocalPair3d& r0,
+                                   double tol, int max_iterations) {
+  return solve_local_3d(x_free, w, mu, rho, r0, tol, max_iterations);
+}
+inline LocalPair3d closed_form_reaction(const LocalPair3d& x_free, double w, double mu) {
+  return closed_form_reaction_3d(x_free, w, mu);
+}
+
+// The length |(n, t)| of a local pair in either dimension, as solve_local's stopping test
+// measures it: hypot(n, t) in 2D, hypot(n, hypot(t1, t2)) in 3D (no overflow or underflow of the
+// squares; a 3D pair with one tangential component zero has the 2D pair's length exactly).
+inline double local_norm(const LocalPair& a) { return std::hypot(a.n, a.t); }
+inline double local_norm(const LocalPair3d& a) { return std::hypot(a.n, tangential_norm_3d(a.t)); }
+
 // The contact frame of a unit normal n: tangents t1, t2 with (t1, t2, n) orthonormal and
 // right-handed (t1 x t2 = n). The tangents follow Duff, Burgess, Christensen, Hery, Kensler,
 // Liani & Villemin (2017), "Building an orthonormal basis, revisited", J. Computer Graphics
