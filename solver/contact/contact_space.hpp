@@ -13,6 +13,7 @@
 #include <cmath>
 
 #include "solver/contact/coulomb.hpp"
+#include "solver/contact/coulomb3d.hpp"  // local_norm, the 3D local pair and frame
 #include "solver/model/types.hpp"
 
 namespace ricochet {
@@ -36,9 +37,9 @@ struct ContactFrame<2> {
   double tangential(const Vec2& v) const { return t.dot(v); }
 };
 
-// |(dn, dt)| of two local pairs, and |(n, t)| of one: the Gauss-Seidel stopping rule.
+// |(dn, dt)| of two local pairs (and local_norm(), coulomb3d.hpp, |(n, t)| of one): the
+// Gauss-Seidel stopping rule.
 inline double local_distance(const LocalPair& a, const LocalPair& b) { return std::hypot(a.n - b.n, a.t - b.t); }
-inline double local_norm(const LocalPair& a) { return std::hypot(a.n, a.t); }
 // The tangential part of a local pair (a scalar in 2D): its magnitude, the value of magnitude
 // `cap` in its direction, and the dot product.
 inline double tangential_abs(double t) { return std::abs(t); }
