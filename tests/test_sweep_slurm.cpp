@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "harness/input/input_error.hpp"
+#include "harness/outputs/csv_reader.hpp"
 #include "harness/outputs/json_io.hpp"
 #include "harness/sweeps/sweep_slurm.hpp"
 
@@ -134,38 +135,6 @@ Outcome program(const std::string& args, const std::string& prefix, const fs::pa
   o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   o.err = text_of(err_file);
   return o;
-}
-
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> out(1);
-  std::string cur;
-  bool quoted = false, fresh = true;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"' && fresh) {
-      quoted = true;
-    } else if (c == ',' || c == '\n') {
-      out.back().push_back(cur);
-      cur.clear();
-      if (c == '\n') out.emplace_back();
-      fresh = true;
-      continue;
-    } else {
-      cur += c;
-    }
-    fresh = false;
-  }
-  if (out.back().empty()) out.pop_back();
-  return out;
 }
 
 class SweepSlurmTest : public ::testing::Test {
@@ -530,20 +499,17 @@ TEST_F(SweepSlurmTest, TheScriptsRunByHandGiveTheTableOfASweepWithoutShards) {
   ASSERT_EQ(m.status, 0) << m.out << m.err;
   EXPECT_NE(m.out.find("gates: "), std::string::npos) << m.out;  // the gate lines of --check
 
-  const auto a = parse_csv(text_of(dir_ / "single/summary.csv")), b = parse_csv(text_of(dir_ / "out dir/summary.csv"));
-  ASSERT_EQ(a.size(), 7u);  // header and 6 runs
-  ASSERT_EQ(b.size(), a.size());
-  ASSERT_EQ(a[0], b[0]);
+  const CsvTable a = read_csv(dir_ / "single/summary.csv"), b = read_csv(dir_ / "out dir/summary.csv");
+  ASSERT_EQ(a.rows.size(), 6u);  // 6 runs
+  ASSERT_EQ(b.rows.size(), a.rows.size());
+  ASSERT_EQ(a.columns, b.columns);
   std::size_t compared = 0;
-  for (std::size_t r = 1; r < a.size(); ++r) {
-    ASSERT_EQ(a[r].size(), a[0].size());
-    ASSERT_EQ(b[r].size(), a[0].size());
-    for (std::size_t c = 0; c < a[0].size(); ++c) {
-      if (kTimingColumns.count(a[0][c])) continue;
-      EXPECT_EQ(a[r][c], b[r][c]) << a[r][0] << " " << a[0][c];
+  for (std::size_t r = 0; r < a.rows.size(); ++r)
+    for (std::size_t c = 0; c < a.columns.size(); ++c) {
+      if (kTimingColumns.count(a.columns[c])) continue;
+      EXPECT_EQ(a.rows[r][c], b.rows[r][c]) << a.rows[r][0] << " " << a.columns[c];
       ++compared;
     }
-  }
   EXPECT_GT(compared, 300u);
 
   // Submitted again and run: every shard resumes all its runs, runs none.
