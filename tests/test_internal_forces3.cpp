@@ -117,10 +117,10 @@ Reference one_cell_forces(const Model3& model, const double* u, const double* v)
             const auto ue = component_major<8>(gather3<8>(u, b.conn[e]));
             const auto ve = component_major<8>(gather3<8>(v, b.conn[e]));
             double h[9], f[9], p[9], det, fe[24];
-            hex8wh::one_point_gradient<1>(hex8wh::CellNodes<8>{ue.data()}, g.data(), h, f);
+            hex8wh::one_point_gradient(hex8wh::CellNodes<8>{ue.data()}, g.data(), h, f);
             const Mat3 F = law(mat, f, p, &det);
-            const double work = viscous ? hex8wh::one_point_forces<true, 1>(p, hex8wh::CellNodes<8>{ve.data()}, h, g.data(), fe)
-                                        : hex8wh::one_point_forces<false, 1>(p, hex8wh::CellNodes<8>{ue.data()}, h, g.data(), fe);
+            const double work = viscous ? hex8wh::one_point_forces<true>(p, hex8wh::CellNodes<8>{ve.data()}, h, g.data(), fe)
+                                        : hex8wh::one_point_forces<false>(p, hex8wh::CellNodes<8>{ue.data()}, h, g.data(), fe);
             scatter(b.conn[e], fe);
             (viscous ? r.hourglass_power : r.hourglass_energy) += viscous ? work : 0.5 * work;
             r.strain_energy += g[Hex8OnePointLanes::kVol] * mat.energy_density(F);
@@ -134,15 +134,15 @@ Reference one_cell_forces(const Model3& model, const double* u, const double* v)
             const auto g = cell_lane_values(b, e);
             const auto ue = component_major<8>(gather3<8>(u, b.conn[e]));
             double h[72], gq[72], fe[24];
-            hex8wh::reference_gradients<1>(hex8wh::CellNodes<8>{ue.data()}, h);
+            hex8wh::reference_gradients(hex8wh::CellNodes<8>{ue.data()}, h);
             for (int q = 0; q < 8; ++q) {
               double f[9], p[9], det;
-              hex8wh::deformation_gradient<1>(h + 9 * q, g.data() + Hex8Lanes::k(q, 0, 0), f);
+              hex8wh::deformation_gradient(h + 9 * q, g.data() + Hex8Lanes::k(q, 0, 0), f);
               const Mat3 F = law(mat, f, p, &det);
-              hex8wh::point_force_coefficients<1>(p, g[Hex8Lanes::vol(q)], g.data() + Hex8Lanes::k(q, 0, 0), gq + 9 * q);
+              hex8wh::point_force_coefficients(p, g[Hex8Lanes::vol(q)], g.data() + Hex8Lanes::k(q, 0, 0), gq + 9 * q);
               r.strain_energy += g[Hex8Lanes::vol(q)] * mat.energy_density(F);
             }
-            hex8wh::reference_forces<1>(gq, fe);
+            hex8wh::reference_forces(gq, fe);
             scatter(b.conn[e], fe);
           }
         },
@@ -154,9 +154,9 @@ Reference one_cell_forces(const Model3& model, const double* u, const double* v)
             const auto g = cell_lane_values(b, e);
             const auto ue = component_major<4>(gather3<4>(u, b.conn[e]));
             double f[9], p[9], det, fe[12];
-            hex8wh::tet4_deformation_gradient<1>(hex8wh::CellNodes<4>{ue.data()}, g.data(), f);
+            hex8wh::tet4_deformation_gradient(hex8wh::CellNodes<4>{ue.data()}, g.data(), f);
             const Mat3 F = law(mat, f, p, &det);
-            hex8wh::tet4_forces<1>(p, g.data(), fe);
+            hex8wh::tet4_forces(p, g.data(), fe);
             scatter(b.conn[e], fe);
             r.strain_energy += g[Tet4Lanes::kVol] * mat.energy_density(F);
           }

@@ -84,14 +84,37 @@ void for_each_block(const Model3& model, Fn&& fn) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The cells' arithmetic, one lane at a time: each function reads and writes through pointers with
-// a stride S (material_lanes3.hpp): S = kLanes from a lane loop (&a[0][l] of a batch's
-// lane-major arrays), S = 1 for one cell. Nodal values come through an accessor x(i, a),
-// component i of node a: StridedNodes over a batch's gathered values (lanes3::Nodes; reading
-// the flat DOF array inside the lane loop instead, GCC's emulated gathers, measured 3-8 % slower
-// on this project's machine), CellNodes over one cell's array. The kernels below and the
-// one-cell functions after them run the same functions, so the same bits.
+// The cells' arithmetic, one lane at a time. Every function indexes its arrays with [], so it
+// takes a plain pointer (one cell's own arrays, stride 1) or a Strided accessor (a batch's
+// lane-major arrays: lane_in(&a[0][l])[k] reads a[k][l]). A lane loop must see every
+// access as a[k][l] of an array outside it: GCC 12 privatizes a local array of a
+// `#pragma omp simd` body per lane and then gives up on the loop, so the lane loops call these
+// functions with accessors and keep their own temporaries inside them. Nodal values come through
+// an accessor x(i, a), component i of node a: StridedNodes over a batch's gathered values
+// (lanes3::Nodes; reading the flat DOF array inside the lane loop instead, GCC's emulated
+// gathers, measured 3-8 % slower on this project's machine), CellNodes over one cell's array.
+// The kernels below and the one-cell functions after them run the same functions, so the same
+// bits.
 namespace hex8wh {
+
+// a[k] = p[S k].
+template <int S, class T>
+struct Strided {
+  T* p;
+  EIGEN_ALWAYS_INLINE T& operator[](int k) const { return p[S * k]; }
+};
+// A batch's lane-major array seen from lane l: lane_in(&a[0][l])[k] is a[k][l].
+EIGEN_ALWAYS_INLINE Strided<kLanes, const double> lane_in(const double* p) { return {p}; }
+EIGEN_ALWAYS_INLINE Strided<kLanes, double> lane_out(double* p) { return {p}; }
+// The same array from entry n on.
+template <class T>
+EIGEN_ALWAYS_INLINE T* shifted(T* p, int n) {
+  return p + n;
+}
+template <int S, class T>
+EIGEN_ALWAYS_INLINE Strided<S, T> shifted(const Strided<S, T>& a, int n) {
+  return {a.p + S * n};
+}
 
 // Nodal values u[S (N i + a)]: a batch's gathered values (lanes3::Nodes, from &v[0][0][l],
 // S = kLanes) or one cell's (S = 1).
@@ -100,12 +123,8 @@ struct StridedNodes {
   const double* u;
   EIGEN_ALWAYS_INLINE double operator()(int i, int a) const { return u[S * (N * i + a)]; }
 };
-// One cell's nodal values u[N i + a].
 template <int N>
-struct CellNodes {
-  const double* u;
-  EIGEN_ALWAYS_INLINE double operator()(int i, int a) const { return u[N * i + a]; }
-};
+using CellNodes = StridedNodes<N, 1>;
 
 // Corner (VTK order) at the bit pattern k = b_xi + 2 b_eta + 4 b_zeta (bit 1: sign +1), and the
 // monomial (kHexMonomialSigns order) whose odd variables are the bits of k.
@@ -114,8 +133,9 @@ inline constexpr int kMonomialOfBits[8] = {0, 1, 2, 6, 3, 5, 4, 7};
 inline constexpr double kG = 0.57735026918962576451;      // 1/sqrt 3, the Gauss points' coordinate
 inline constexpr double kThird = 0.33333333333333333333;  // 1/3 = g^2
 
-// c_m = sum_a s_am x(i, a) for the monomials m = 0..7 (c[m], a local array): butterflies over
-// xi, eta, zeta, each pair (minus, plus) -> (plus + minus, plus - minus).
+// c_m = sum_a s_am x(i, a) for the monomials m = 0..7 (c a local array): butterflies over
+// xi, eta, zeta (the stages as counted loops: GCC unrolls `1 << stage`, not `b <<= 1`), each pair
+// (minus, plus) -> (plus + minus, plus - minus).
 template <class X>
 EIGEN_ALWAYS_INLINE void hadamard_forward(const X& x, int i, double* c) {
   double y[8];
@@ -134,10 +154,9 @@ EIGEN_ALWAYS_INLINE void hadamard_forward(const X& x, int i, double* c) {
   for (int k = 0; k < 8; ++k) c[kMonomialOfBits[k]] = y[k];
 }
 
-// x_a = sum_m s_am c_m (c[m] a local array, x[S a]): the butterflies (even, odd) ->
-// (even - odd, even + odd).
-template <int S>
-EIGEN_ALWAYS_INLINE void hadamard_inverse(const double* c, double* x) {
+// x[a] = sum_m s_am c_m (c a local array): the butterflies (even, odd) -> (even - odd, even + odd).
+template <class O>
+EIGEN_ALWAYS_INLINE void hadamard_inverse(const double* c, O x) {
   double y[8];
   RICOCHET_UNROLL
   for (int k = 0; k < 8; ++k) y[k] = c[kMonomialOfBits[k]];
@@ -151,7 +170,7 @@ EIGEN_ALWAYS_INLINE void hadamard_inverse(const double* c, double* x) {
         y[k + b] = even + odd;
       }
   RICOCHET_UNROLL
-  for (int k = 0; k < 8; ++k) x[S * kCornerOfBits[k]] = y[k];
+  for (int k = 0; k < 8; ++k) x[kCornerOfBits[k]] = y[k];
 }
 
 // The coefficients of the three components of nodal values x: c[8 i + m].
@@ -167,12 +186,12 @@ EIGEN_ALWAYS_INLINE void hadamard_forward3(const X& x, double* c) {
 inline constexpr int kMixed[3][2] = {{6, 5}, {6, 4}, {5, 4}};
 inline constexpr int kOther[3][2] = {{1, 2}, {0, 2}, {0, 1}};
 
-// 8 du_i/dxi_K at the 2x2x2 points from the nodal values u(i, a): h[S (9 q + 3 i + K)] at
-// point q (next to corner q). With c the coefficients, A = c_K, B = g c_(K o1), C = g c_(K o2),
+// 8 du_i/dxi_K at the 2x2x2 points from the nodal values u(i, a): h[9 q + 3 i + K] at point q
+// (next to corner q). With c the coefficients, A = c_K, B = g c_(K o1), C = g c_(K o2),
 // D = c_xietazeta / 3, the value at the signs (s1, s2) of the other two variables is
 // A + s1 B + s2 C + s1 s2 D: (A + D) +- (B + C) for s1 = s2, (A - D) +- (B - C) otherwise.
-template <int S, class X>
-EIGEN_ALWAYS_INLINE void reference_gradients(const X& u, double* h) {
+template <class X, class H>
+EIGEN_ALWAYS_INLINE void reference_gradients(const X& u, H h) {
   double c[24];
   hadamard_forward3(u, c);
   RICOCHET_UNROLL
@@ -186,7 +205,7 @@ EIGEN_ALWAYS_INLINE void reference_gradients(const X& u, double* h) {
       RICOCHET_UNROLL
       for (int q = 0; q < 8; ++q) {
         const int s1 = kHexCornerSigns[q][kOther[K][0]], s2 = kHexCornerSigns[q][kOther[K][1]];
-        h[S * (9 * q + 3 * i + K)] = s1 > 0 ? (s2 > 0 ? pp : pm) : (s2 > 0 ? mp : mm);
+        h[9 * q + 3 * i + K] = s1 > 0 ? (s2 > 0 ? pp : pm) : (s2 > 0 ? mp : mm);
       }
     }
 }
@@ -203,13 +222,13 @@ inline constexpr std::array<std::array<std::array<int, 2>, 4>, 3> kPairs = [] {
   return p;
 }();
 
-// The transpose of reference_gradients: from G (g[S (9 q + 3 i + K)], the points' vol P K^T),
-// the nodal forces f[S (8 i + a)] = sum_q sum_K G_iK(q) 8 dN_a/dxi_K(q). For each (i, K): the
-// pair sums S(s1, s2), then sum S, g sum s1 S, g sum s2 S, 1/3 sum s1 s2 S onto the monomials
-// K, (K o1), (K o2), xi eta zeta (the mixed ones get two directions' terms, xi eta zeta three,
+// The transpose of reference_gradients: from G (g[9 q + 3 i + K], the points' vol P K^T), the
+// nodal forces f[8 i + a] = sum_q sum_K G_iK(q) 8 dN_a/dxi_K(q). For each (i, K): the pair
+// sums S(s1, s2), then sum S, g sum s1 S, g sum s2 S, 1/3 sum s1 s2 S onto the monomials K,
+// (K o1), (K o2), xi eta zeta (the mixed ones get two directions' terms, xi eta zeta three,
 // added in the order of K), and the nodal values by hadamard_inverse.
-template <int S>
-EIGEN_ALWAYS_INLINE void reference_forces(const double* g, double* f) {
+template <class G, class O>
+EIGEN_ALWAYS_INLINE void reference_forces(G g, O f) {
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i) {
     double t[3][4];  // per K: sum, o1 term, o2 term, o1 o2 term
@@ -217,8 +236,7 @@ EIGEN_ALWAYS_INLINE void reference_forces(const double* g, double* f) {
     for (int K = 0; K < 3; ++K) {
       double s[4];  // S(-,-), S(-,+), S(+,-), S(+,+)
       RICOCHET_UNROLL
-      for (int k = 0; k < 4; ++k)
-        s[k] = g[S * (9 * kPairs[K][k][0] + 3 * i + K)] + g[S * (9 * kPairs[K][k][1] + 3 * i + K)];
+      for (int k = 0; k < 4; ++k) s[k] = g[9 * kPairs[K][k][0] + 3 * i + K] + g[9 * kPairs[K][k][1] + 3 * i + K];
       const double a = s[3] + s[0], b = s[2] + s[1], c = s[3] - s[0], d = s[2] - s[1];
       t[K][0] = a + b;
       t[K][1] = kG * (c + d);
@@ -234,92 +252,89 @@ EIGEN_ALWAYS_INLINE void reference_forces(const double* g, double* f) {
     fh[5] = t[0][2] + t[2][1];  // xi zeta: d/dxi's zeta term, d/dzeta's xi term
     fh[4] = t[1][2] + t[2][2];  // eta zeta: d/deta's zeta term, d/dzeta's eta term
     fh[7] = (t[0][3] + t[1][3]) + t[2][3];
-    hadamard_inverse<S>(fh, f + S * 8 * i);
+    hadamard_inverse(fh, shifted(f, 8 * i));
   }
 }
 
 // F = I + h k at a point: f[3 i + J] = delta_iJ + (h_i0 k_0J + h_i1 k_1J + h_i2 k_2J) (h = 8 du/dxi,
-// k = J^-1 / 8, both row-major; every array with stride S).
-template <int S>
-EIGEN_ALWAYS_INLINE void deformation_gradient(const double* h, const double* k, double* f) {
+// k = J^-1 / 8, both row-major).
+template <class H, class KM, class F>
+EIGEN_ALWAYS_INLINE void deformation_gradient(H h, KM k, F f) {
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i)
     RICOCHET_UNROLL
     for (int J = 0; J < 3; ++J)
-      f[S * (3 * i + J)] = (i == J ? 1.0 : 0.0) + (h[S * (3 * i)] * k[S * J] + h[S * (3 * i + 1)] * k[S * (3 + J)] +
-                                                   h[S * (3 * i + 2)] * k[S * (6 + J)]);
+      f[3 * i + J] = (i == J ? 1.0 : 0.0) + (h[3 * i] * k[J] + h[3 * i + 1] * k[3 + J] + h[3 * i + 2] * k[6 + J]);
 }
 
-// G = (vol P) K^T at a point: g[3 i + K] = vP_i0 k_K0 + vP_i1 k_K1 + vP_i2 k_K2 (stride S).
-template <int S>
-EIGEN_ALWAYS_INLINE void point_force_coefficients(const double* p, double vol, const double* k, double* g) {
+// G = (vol P) K^T at a point: g[3 i + K] = vP_i0 k_K0 + vP_i1 k_K1 + vP_i2 k_K2.
+template <class P, class KM, class G>
+EIGEN_ALWAYS_INLINE void point_force_coefficients(P p, double vol, KM k, G g) {
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i) {
-    const double v0 = vol * p[S * (3 * i)], v1 = vol * p[S * (3 * i + 1)], v2 = vol * p[S * (3 * i + 2)];
+    const double v0 = vol * p[3 * i], v1 = vol * p[3 * i + 1], v2 = vol * p[3 * i + 2];
     RICOCHET_UNROLL
-    for (int K = 0; K < 3; ++K) g[S * (3 * i + K)] = v0 * k[S * (3 * K)] + v1 * k[S * (3 * K + 1)] + v2 * k[S * (3 * K + 2)];
+    for (int K = 0; K < 3; ++K) g[3 * i + K] = v0 * k[3 * K] + v1 * k[3 * K + 1] + v2 * k[3 * K + 2];
   }
 }
 
 // One point: H = sum_{m=1..7} c_m Bh_m^T, h[3 i + J] = sum_m c[8 i + m] bh[3 (m - 1) + J] in the
-// order of m (c and h local arrays; bh, the geometry's first values, with stride S).
-template <int S>
-EIGEN_ALWAYS_INLINE void mean_gradient(const double* c, const double* bh, double* h) {
+// order of m (c and h local arrays; bh the geometry's first values).
+template <class B>
+EIGEN_ALWAYS_INLINE void mean_gradient(const double* c, B bh, double* h) {
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i)
     RICOCHET_UNROLL
     for (int J = 0; J < 3; ++J) {
-      double s = c[8 * i + 1] * bh[S * J];
+      double s = c[8 * i + 1] * bh[J];
       RICOCHET_UNROLL
-      for (int m = 2; m < 8; ++m) s += c[8 * i + m] * bh[S * (3 * (m - 1) + J)];
+      for (int m = 2; m < 8; ++m) s += c[8 * i + m] * bh[3 * (m - 1) + J];
       h[3 * i + J] = s;
     }
 }
 
 // One point: F = I + u B from the nodal displacements u(i, a) and the geometry
-// (Hex8OnePointLanes), f[S (3 i + J)]; H = u B itself in h[S (3 i + J)].
-template <int S, class X>
-EIGEN_ALWAYS_INLINE void one_point_gradient(const X& u, const double* geom, double* h, double* f) {
+// (Hex8OnePointLanes): f[3 i + J]; H = u B itself in h[3 i + J].
+template <class X, class Gm, class H, class F>
+EIGEN_ALWAYS_INLINE void one_point_gradient(const X& u, Gm geom, H h, F f) {
   double c[24], hl[9];
   hadamard_forward3(u, c);
-  mean_gradient<S>(c, geom, hl);
+  mean_gradient(c, geom, hl);
   RICOCHET_UNROLL
   for (int n = 0; n < 9; ++n) {
-    h[S * n] = hl[n];
-    f[S * n] = (n % 4 == 0 ? 1.0 : 0.0) + hl[n];
+    h[n] = hl[n];
+    f[n] = (n % 4 == 0 ? 1.0 : 0.0) + hl[n];
   }
 }
 
 // One point with hourglass control, after the law: from P (p), the hourglass field's nodal
-// values a(i, n) (u for the stiffness form, v for the viscous one) and for the stiffness
-// form H = u B (hu, from one_point_gradient), the geometry (Hex8OnePointLanes): the nodal forces
-// f[S (8 i + a)] and sum Q . q, returned (the power of the viscous form, twice the stored energy
-// of the stiffness form). With c the coefficients of a and Ha = a B: 8 q_alpha = c_(4 + alpha) -
+// values a(i, n) (u for the stiffness form, v for the viscous one) and for the stiffness form
+// H = u B (hu, from one_point_gradient), the geometry (Hex8OnePointLanes): the nodal forces
+// f[8 i + a] and sum Q . q, returned (the power of the viscous form, twice the stored energy of
+// the stiffness form). With c the coefficients of a and Ha = a B: 8 q_alpha = c_(4 + alpha) -
 // Ha xh_alpha, Q_alpha / 8 = (c / 64)(8 q_alpha); T = vol P - R, R_iJ = sum_alpha (Q_alpha / 8)_i
 // xh_alpha,J; the coefficients T Bh_m^T plus Q_alpha / 8 on the hourglass monomials, then
-// hadamard_inverse. Every array has stride S.
-template <bool kViscous, int S, class X>
-EIGEN_ALWAYS_INLINE double one_point_forces(const double* p, const X& a, const double* hu, const double* geom,
-                                            double* f) {
+// hadamard_inverse.
+template <bool kViscous, class P, class X, class H, class Gm, class O>
+EIGEN_ALWAYS_INLINE double one_point_forces(P p, const X& a, H hu, Gm geom, O f) {
   using L = Hex8OnePointLanes;
-  auto G = [&](int j) { return geom[S * j]; };
   double c[24], ha[9];
   hadamard_forward3(a, c);
   if constexpr (kViscous) {
-    mean_gradient<S>(c, geom, ha);
+    mean_gradient(c, geom, ha);
   } else {
     RICOCHET_UNROLL
-    for (int n = 0; n < 9; ++n) ha[n] = hu[S * n];
+    for (int n = 0; n < 9; ++n) ha[n] = hu[n];
   }
-  const double c64 = G(L::kCoeff64), vol = G(L::kVol);
+  const double c64 = geom[L::kCoeff64], vol = geom[L::kVol];
   double q8[12], Q8[12];
   double work = 0.0;
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i)
     RICOCHET_UNROLL
     for (int al = 0; al < 4; ++al) {
-      q8[4 * i + al] = c[8 * i + 4 + al] -
-                       (ha[3 * i] * G(L::xh(al, 0)) + ha[3 * i + 1] * G(L::xh(al, 1)) + ha[3 * i + 2] * G(L::xh(al, 2)));
+      q8[4 * i + al] = c[8 * i + 4 + al] - (ha[3 * i] * geom[L::xh(al, 0)] + ha[3 * i + 1] * geom[L::xh(al, 1)] +
+                                            ha[3 * i + 2] * geom[L::xh(al, 2)]);
       Q8[4 * i + al] = c64 * q8[4 * i + al];
       work += Q8[4 * i + al] * q8[4 * i + al];
     }
@@ -328,41 +343,42 @@ EIGEN_ALWAYS_INLINE double one_point_forces(const double* p, const X& a, const d
     double tm[3];
     RICOCHET_UNROLL
     for (int J = 0; J < 3; ++J)
-      tm[J] = vol * p[S * (3 * i + J)] - ((Q8[4 * i] * G(L::xh(0, J)) + Q8[4 * i + 1] * G(L::xh(1, J))) +
-                                          (Q8[4 * i + 2] * G(L::xh(2, J)) + Q8[4 * i + 3] * G(L::xh(3, J))));
+      tm[J] = vol * p[3 * i + J] - ((Q8[4 * i] * geom[L::xh(0, J)] + Q8[4 * i + 1] * geom[L::xh(1, J)]) +
+                                    (Q8[4 * i + 2] * geom[L::xh(2, J)] + Q8[4 * i + 3] * geom[L::xh(3, J)]));
     double fh[8];
     fh[0] = 0.0;
     RICOCHET_UNROLL
-    for (int m = 1; m < 8; ++m) fh[m] = tm[0] * G(L::bh(m, 0)) + tm[1] * G(L::bh(m, 1)) + tm[2] * G(L::bh(m, 2));
+    for (int m = 1; m < 8; ++m)
+      fh[m] = tm[0] * geom[L::bh(m, 0)] + tm[1] * geom[L::bh(m, 1)] + tm[2] * geom[L::bh(m, 2)];
     RICOCHET_UNROLL
     for (int al = 0; al < 4; ++al) fh[4 + al] += Q8[4 * i + al];
-    hadamard_inverse<S>(fh, f + S * 8 * i);
+    hadamard_inverse(fh, shifted(f, 8 * i));
   }
   return work;
 }
 
 // The tetrahedron as element3d.hpp: F = I + u dN/dX, F_iJ = delta + ((u_i0 d_0J + u_i1 d_1J) +
-// (u_i2 d_2J + u_i3 d_3J)) (u(i, a), geometry Tet4Lanes, stride S).
-template <int S, class X>
-EIGEN_ALWAYS_INLINE void tet4_deformation_gradient(const X& U, const double* geom, double* f) {
-  auto D = [&](int a, int J) { return geom[S * Tet4Lanes::dndx(a, J)]; };
+// (u_i2 d_2J + u_i3 d_3J)) (geometry Tet4Lanes).
+template <class X, class Gm, class F>
+EIGEN_ALWAYS_INLINE void tet4_deformation_gradient(const X& U, Gm geom, F f) {
+  auto D = [&](int a, int J) { return geom[Tet4Lanes::dndx(a, J)]; };
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i)
     RICOCHET_UNROLL
     for (int J = 0; J < 3; ++J)
-      f[S * (3 * i + J)] = (i == J ? 1.0 : 0.0) + ((U(i, 0) * D(0, J) + U(i, 1) * D(1, J)) + (U(i, 2) * D(2, J) + U(i, 3) * D(3, J)));
+      f[3 * i + J] = (i == J ? 1.0 : 0.0) + ((U(i, 0) * D(0, J) + U(i, 1) * D(1, J)) + (U(i, 2) * D(2, J) + U(i, 3) * D(3, J)));
 }
 
-// f = (vol P) dN/dX^T: f_ia = (vol P)_i0 d_a0 + ((vol P)_i1 d_a1 + (vol P)_i2 d_a2) (f[S (4 i + a)]).
-template <int S>
-EIGEN_ALWAYS_INLINE void tet4_forces(const double* p, const double* geom, double* f) {
-  auto D = [&](int a, int J) { return geom[S * Tet4Lanes::dndx(a, J)]; };
-  const double vol = geom[S * Tet4Lanes::kVol];
+// f = (vol P) dN/dX^T: f_ia = (vol P)_i0 d_a0 + ((vol P)_i1 d_a1 + (vol P)_i2 d_a2) (f[4 i + a]).
+template <class P, class Gm, class O>
+EIGEN_ALWAYS_INLINE void tet4_forces(P p, Gm geom, O f) {
+  auto D = [&](int a, int J) { return geom[Tet4Lanes::dndx(a, J)]; };
+  const double vol = geom[Tet4Lanes::kVol];
   RICOCHET_UNROLL
   for (int i = 0; i < 3; ++i) {
-    const double v0 = vol * p[S * (3 * i)], v1 = vol * p[S * (3 * i + 1)], v2 = vol * p[S * (3 * i + 2)];
+    const double v0 = vol * p[3 * i], v1 = vol * p[3 * i + 1], v2 = vol * p[3 * i + 2];
     RICOCHET_UNROLL
-    for (int a = 0; a < 4; ++a) f[S * (4 * i + a)] = v0 * D(a, 0) + (v1 * D(a, 1) + v2 * D(a, 2));
+    for (int a = 0; a < 4; ++a) f[4 * i + a] = v0 * D(a, 0) + (v1 * D(a, 1) + v2 * D(a, 2));
   }
 }
 
@@ -401,10 +417,10 @@ inline void hex8_point_gradients(const Hex8Block& b, std::size_t e, const Hex8No
   const std::array<double, 24> u = component_major<8>(ue);
   const std::array<double, Hex8Lanes::kValues> g = cell_lane_values(b, e);
   double h[72];
-  hex8wh::reference_gradients<1>(hex8wh::CellNodes<8>{u.data()}, h);
+  hex8wh::reference_gradients(hex8wh::CellNodes<8>{u.data()}, h);
   for (int q = 0; q < 8; ++q) {
     double f[9];
-    hex8wh::deformation_gradient<1>(h + 9 * q, g.data() + 10 * q, f);
+    hex8wh::deformation_gradient(h + 9 * q, g.data() + Hex8Lanes::k(q, 0, 0), f);
     F[q] = row_major(f);
   }
 }
@@ -414,7 +430,7 @@ inline Mat3 hex8_one_point_gradient(const Hex8OnePointBlock& b, std::size_t e, c
   const std::array<double, 24> u = component_major<8>(ue);
   const std::array<double, Hex8OnePointLanes::kValues> g = cell_lane_values(b, e);
   double h[9], f[9];
-  hex8wh::one_point_gradient<1>(hex8wh::CellNodes<8>{u.data()}, g.data(), h, f);
+  hex8wh::one_point_gradient(hex8wh::CellNodes<8>{u.data()}, g.data(), h, f);
   return row_major(f);
 }
 
@@ -423,7 +439,7 @@ inline Mat3 tet4_gradient(const Tet4Block& b, std::size_t e, const Tet4Nodes& ue
   const std::array<double, 12> u = component_major<4>(ue);
   const std::array<double, Tet4Lanes::kValues> g = cell_lane_values(b, e);
   double f[9];
-  hex8wh::tet4_deformation_gradient<1>(hex8wh::CellNodes<4>{u.data()}, g.data(), f);
+  hex8wh::tet4_deformation_gradient(hex8wh::CellNodes<4>{u.data()}, g.data(), f);
   return row_major(f);
 }
 
@@ -431,9 +447,7 @@ inline Mat3 tet4_gradient(const Tet4Block& b, std::size_t e, const Tet4Nodes& ue
 template <int N>
 inline Nodes3<N> gather3(const double* a, const std::array<int, N>& c) {
   Nodes3<N> e;
-  RICOCHET_UNROLL
   for (int i = 0; i < N; ++i)
-    RICOCHET_UNROLL
     for (int k = 0; k < 3; ++k) e(k, i) = a[3 * c[i] + k];
   return e;
 }
@@ -529,13 +543,15 @@ template <bool kViscous, class Pass, class Mat, class Out>
     lanes3::gather<4>(u, b.batch_conn(e / kLanes), ue);
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l)
-      hex8wh::tet4_deformation_gradient<kLanes>(hex8wh::StridedNodes<4, kLanes>{&ue.v[0][0][l]}, g + l, &F.m[0][l]);
+      hex8wh::tet4_deformation_gradient(hex8wh::StridedNodes<4, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_in(g + l),
+                                        hex8wh::lane_out(&F.m[0][l]));
     determinant_lanes(F, det);
-    lanes3::min_into(min_j, det);
     first_piola_lanes(mat, F, P);
-    if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
 #pragma omp simd
-    for (int l = 0; l < kLanes; ++l) hex8wh::tet4_forces<kLanes>(&P.m[0][l], g + l, &fe.v[0][0][l]);
+    for (int l = 0; l < kLanes; ++l)
+      hex8wh::tet4_forces(hex8wh::lane_in(&P.m[0][l]), hex8wh::lane_in(g + l), hex8wh::lane_out(&fe.v[0][0][l]));
+    lanes3::min_into(min_j, det);
+    if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
     const double* vol = g + Tet4Lanes::kVol * kLanes;
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may, kLanes));
@@ -580,22 +596,24 @@ template <bool kViscous, class Pass, class Mat, class Out>
     lanes3::gather<8>(u, b.batch_conn(e / kLanes), ue);
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l)
-      hex8wh::reference_gradients<kLanes>(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, &h[0][l]);
+      hex8wh::reference_gradients(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_out(&h[0][l]));
     for (int q = 0; q < 8; ++q) {
       const double* gk = g + Hex8Lanes::k(q, 0, 0) * kLanes;
-#pragma omp simd
-      for (int l = 0; l < kLanes; ++l) hex8wh::deformation_gradient<kLanes>(&h[9 * q][l], gk + l, &F[q].m[0][l]);
-      determinant_lanes(F[q], det[q]);
-      lanes3::min_into(min_j, det[q]);
-      first_piola_lanes(mat, F[q], P[q]);
-      if constexpr (Pass::kPerPoint) pass.screen(mat, F[q], P[q], det[q], may[q]);
       const double* vol = g + Hex8Lanes::vol(q) * kLanes;
 #pragma omp simd
       for (int l = 0; l < kLanes; ++l)
-        hex8wh::point_force_coefficients<kLanes>(&P[q].m[0][l], vol[l], gk + l, &gq[9 * q][l]);
+        hex8wh::deformation_gradient(hex8wh::lane_in(&h[9 * q][l]), hex8wh::lane_in(gk + l), hex8wh::lane_out(&F[q].m[0][l]));
+      determinant_lanes(F[q], det[q]);
+      first_piola_lanes(mat, F[q], P[q]);
+#pragma omp simd
+      for (int l = 0; l < kLanes; ++l)
+        hex8wh::point_force_coefficients(hex8wh::lane_in(&P[q].m[0][l]), vol[l], hex8wh::lane_in(gk + l),
+                                         hex8wh::lane_out(&gq[9 * q][l]));
+      lanes3::min_into(min_j, det[q]);
+      if constexpr (Pass::kPerPoint) pass.screen(mat, F[q], P[q], det[q], may[q]);
     }
 #pragma omp simd
-    for (int l = 0; l < kLanes; ++l) hex8wh::reference_forces<kLanes>(&gq[0][l], &fe.v[0][0][l]);
+    for (int l = 0; l < kLanes; ++l) hex8wh::reference_forces(hex8wh::lane_in(&gq[0][l]), hex8wh::lane_out(&fe.v[0][0][l]));
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may[0], 8 * kLanes));
     for (int l = 0; l < n; ++l) {
@@ -638,20 +656,22 @@ template <bool kViscous, class Pass, class Mat, class Out>
   for (std::size_t e = e0; e < end; e += kLanes) {
     const double* g = b.batch_geom(e / kLanes);
     const int* conn = b.batch_conn(e / kLanes);
-    lanes3::Nodes<8> ue, fe;
+    lanes3::Nodes<8> ue, ve, fe;
     lanes3::gather<8>(u, conn, ue);
+    if constexpr (kViscous) lanes3::gather<8>(v, conn, ve);
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l)
-      hex8wh::one_point_gradient<kLanes>(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, g + l, &hu[0][l], &F.m[0][l]);
+      hex8wh::one_point_gradient(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_in(g + l),
+                                 hex8wh::lane_out(&hu[0][l]), hex8wh::lane_out(&F.m[0][l]));
     determinant_lanes(F, det);
-    lanes3::min_into(min_j, det);
     first_piola_lanes(mat, F, P);
-    if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
-    if constexpr (kViscous) lanes3::gather<8>(v, conn, ue);  // u is not needed any more: v in its place
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l)
-      work[l] = hex8wh::one_point_forces<kViscous, kLanes>(&P.m[0][l], hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]},
-                                                           &hu[0][l], g + l, &fe.v[0][0][l]);
+      work[l] = hex8wh::one_point_forces<kViscous>(
+          hex8wh::lane_in(&P.m[0][l]), hex8wh::StridedNodes<8, kLanes>{kViscous ? &ve.v[0][0][l] : &ue.v[0][0][l]},
+          hex8wh::lane_in(&hu[0][l]), hex8wh::lane_in(g + l), hex8wh::lane_out(&fe.v[0][0][l]));
+    lanes3::min_into(min_j, det);
+    if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may, kLanes));
     for (int l = 0; l < n; ++l) {
