@@ -48,6 +48,11 @@ void hex8_mean_gradients(const Hex8Geom& full, Hex8Grad& b_mean, double& volume)
 
 }  // namespace
 
+Mat3 hex8_jacobian(const Hex8Nodes& x, int q) {
+  const Vec3 p = hex8_gauss_point(q);
+  return x * hex8_dn_dxi(p.x(), p.y(), p.z());
+}
+
 bool hex8_geometry(const Hex8Nodes& x, Hex8Geom& g) {
   for (int q = 0; q < 8; ++q) {
     const Vec3 p = hex8_gauss_point(q);

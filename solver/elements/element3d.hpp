@@ -6,8 +6,10 @@
 // strain energy sum vol W(F), the smallest det F; the element matrix K = sum vol B^T A B. Plus
 // what the model needs of each cell once: the reference geometry (gradients, volumes,
 // hourglass vectors and coefficient), the lumped masses and the critical-step length.
-// Nothing calls these yet: Model, the force pass and the schemes are 2D (see the docs for
-// what wiring them in takes).
+// The 3D model (model3.hpp) builds its geometry, masses and critical lengths with these; the 3D
+// force pass (element_kernels3.hpp) runs the same formulations on batches of cells, equal to
+// these kernels to round-off; no scheme uses them yet (docs/three-dimensions.md, Not wired in
+// yet).
 //
 // Element arrays: positions, displacements, velocities and forces are 3 x N (column a = node a,
 // VTK corner order, mesh3.hpp). As a flat column-major vector the degrees of freedom run
@@ -73,6 +75,10 @@ struct Hex8Geom {
   std::array<double, 8> vol;  // [m^3], sum = the cell's volume
 };
 bool hex8_geometry(const Hex8Nodes& x, Hex8Geom& g);
+
+// J = dX/dxi at the 2x2x2 Gauss point q, the matrix hex8_geometry() inverts (the same arithmetic,
+// so the same bits): the 3D model stores J^-1 and det J per point instead of dN/dX (model3.hpp).
+Mat3 hex8_jacobian(const Hex8Nodes& x, int q);
 
 // One point: the mean ("uniform strain") gradients B = (1/V) int dN/dX dV = b / V with
 // b_iI = dV/dX_iI (Flanagan & Belytschko 1981), V the volume, the hourglass vectors

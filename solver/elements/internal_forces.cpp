@@ -112,7 +112,7 @@ void all_blocks(const Model& model, const double* u, const double* v, double* f,
     const ForceScratch::Chunk& k = x.chunks[c];
     ForceTotals& tc = x.totals[c];
     tc = start;
-    visit_block(model, k.kind, k.block, [&](const auto& b, const auto& mat, auto viscous) {
+    visit_block(model, static_cast<BlockKind>(k.kind), k.block, [&](const auto& b, const auto& mat, auto viscous) {
       force_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore{x.element_forces.data() + k.out},
                                                ForcePass<kEnergy, kStress, kSample>(cc, tc), tc, k.begin, k.end);
     });
@@ -200,7 +200,7 @@ ForceScratch make_force_scratch(const Model& model) {
       visit_block(model, kind, k, [&](const auto& b, const auto&, auto) {
         constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
         for (std::size_t e0 = 0; e0 < b.conn.size(); e0 += kForceChunkCells)
-          x.chunks.push_back({kind, k, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
+          x.chunks.push_back({static_cast<int>(kind), k, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
         for (std::size_t e = 0; e < b.conn.size(); ++e)
           for (int i = 0; i < N; ++i) node_entries[b.conn[e][i]].push_back(static_cast<int>(out + 2 * N * e + 2 * i));
         out += 2 * N * b.conn.size();

@@ -56,13 +56,16 @@ double StVenantKirchhoff3::energy_density(const Mat3& F) const {
 }
 
 Mat3 StVenantKirchhoff3::first_piola(const Mat3& F) const {
-  return F * svk_pk2(F, lambda, shear_modulus);
+  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> f = F;
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> p;
+  svk_first_piola3<1>(lambda, shear_modulus, f.data(), p.data());
+  return p;
 }
 
 void StVenantKirchhoff3::first_piola_and_tangent(const Mat3& F, Mat3& P, Mat9& A) const {
   const double mu = shear_modulus;
   const Mat3 S = svk_pk2(F, lambda, mu);
-  P.noalias() = F * S;
+  P = first_piola(F);  // the same bits as first_piola()'s (S above is for A)
   const Mat3 b = F * F.transpose();
   // A(iJ, kL) = delta_ik S_JL + lambda F_iJ F_kL + mu (F_iL F_kJ + b_ik delta_JL).
   for (int i = 0; i < 3; ++i)

@@ -37,6 +37,29 @@ using Mat9 = Eigen::Matrix<double, 9, 9>;
 //   A(iJ, kL) = delta_ik S_JL + lambda F_iJ F_kL + mu (F_iL F_kJ + b_ik delta_JL)
 // (the initial-stress term delta_ik S_JL plus F_iM F_kN C_MJNL with the constant material
 // elasticity tensor C_MJNL = lambda delta_MJ delta_NL + mu (delta_MN delta_JL + delta_ML delta_JN)).
+// St Venant-Kirchhoff's P = F S from the nine entries of F (row-major, f[Stride k]) into
+// p[Stride k], written out once: first_piola() runs it on one F (Stride 1), the 3D force
+// kernels on kLanes of them (material_lanes3.hpp, Stride kLanes), so the two give the same bits.
+//   C_ij = (F_0i F_0j + F_1i F_1j) + F_2i F_2j,  E = (C - I) / 2,  tr E = E_00 + (E_11 + E_22),
+//   S = 2 mu E + lambda tr E I,  P_ij = (F_i0 S_0j + F_i1 S_1j) + F_i2 S_2j.
+template <int Stride>
+inline void svk_first_piola3(double lambda, double mu, const double* f, double* p) {
+  auto F = [&](int k) { return f[Stride * k]; };
+  auto c = [&](int i, int j) { return (F(i) * F(j) + F(3 + i) * F(3 + j)) + F(6 + i) * F(6 + j); };
+  const double mu2 = 2.0 * mu;
+  const double e00 = 0.5 * (c(0, 0) - 1.0), e11 = 0.5 * (c(1, 1) - 1.0), e22 = 0.5 * (c(2, 2) - 1.0);
+  const double e01 = 0.5 * c(0, 1), e02 = 0.5 * c(0, 2), e12 = 0.5 * c(1, 2);
+  const double ltr = lambda * (e00 + (e11 + e22));
+  const double s00 = mu2 * e00 + ltr, s11 = mu2 * e11 + ltr, s22 = mu2 * e22 + ltr;
+  const double s01 = mu2 * e01, s02 = mu2 * e02, s12 = mu2 * e12;
+  for (int i = 0; i < 3; ++i) {
+    const double a = F(3 * i), b = F(3 * i + 1), d = F(3 * i + 2);
+    p[Stride * (3 * i)] = (a * s00 + b * s01) + d * s02;
+    p[Stride * (3 * i + 1)] = (a * s01 + b * s11) + d * s12;
+    p[Stride * (3 * i + 2)] = (a * s02 + b * s12) + d * s22;
+  }
+}
+
 struct StVenantKirchhoff3 {
   double lambda = 0.0;         // first Lame constant [Pa]
   double shear_modulus = 0.0;  // mu [Pa]

@@ -125,7 +125,7 @@ enum class BlockKind { q4_hourglass, q4_full, t3 };
 inline constexpr BlockKind kBlockKinds[] = {BlockKind::q4_hourglass, BlockKind::q4_full, BlockKind::t3};
 
 struct Model {
-  static constexpr int kDim = 2;  // the dimension: templates on the model type read it
+  static constexpr int kDim = 2;  // coordinates per node (Model3: 3), for code written for both
   PlaneMode plane = PlaneMode::stress;
   Eigen::Matrix2Xd ref;         // 2 x n reference coordinates, all bodies [m]
   Eigen::VectorXd mass;         // lumped mass per DOF (2n, x and y equal) [kg]
