@@ -134,8 +134,12 @@ TEST(ElementLanes, ForcePassEqualsTheSerialFormulation) {
         EXPECT_NEAR(t.strain_energy, ref.strain_energy, kForceTol * ref.strain_energy);
         EXPECT_NEAR(t.hourglass_energy, ref.hourglass_energy, kForceTol * std::abs(ref.hourglass_energy));
         EXPECT_NEAR(t.hourglass_power, ref.hourglass_power, kForceTol * std::abs(ref.hourglass_power));
-        if (kind == ElementKind::q4_viscous) EXPECT_GT(ref.hourglass_power, 0.0);
-        if (kind == ElementKind::q4_stiffness) EXPECT_GT(ref.hourglass_energy, 0.0);
+        if (kind == ElementKind::q4_viscous) {
+          EXPECT_GT(ref.hourglass_power, 0.0);
+        }
+        if (kind == ElementKind::q4_stiffness) {
+          EXPECT_GT(ref.hourglass_energy, 0.0);
+        }
         EXPECT_NEAR(t.min_jacobian, ref.min_jacobian, kPointTol);
         EXPECT_NE(ref.min_jacobian, 1.0);  // the field deforms the cells
 
