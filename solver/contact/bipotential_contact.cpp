@@ -163,6 +163,7 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
                                  BipotentialContactT<M::kDim>&, State&);                                     \
   template void add_reaction_accelerations<M>(const M&, const BipotentialContactT<M::kDim>&, State&);
 RICOCHET_BIPOTENTIAL_FOR(Model)
+RICOCHET_BIPOTENTIAL_FOR(Model3)
 #undef RICOCHET_BIPOTENTIAL_FOR
 
 }  // namespace ricochet

@@ -41,6 +41,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "solver/model/model.hpp"
@@ -74,12 +75,15 @@ Surface make_surface(const Model& model, int body);
 // Which nodes and coefficients a contact's relative motion is made of (1 node for a rigid
 // obstacle, 3 for node to segment), and the factors coef_j w_j with w_j = dt^2/m_j (position
 // level) or dt/m_j (velocity level) of the step.
-struct Stencil {
+// N nodes at most: 3 in 2D (node to segment), 5 in 3D (node to a quadrilateral face).
+template <int N>
+struct StencilN {
   int count = 1;
-  std::array<int, 3> node{};
-  std::array<double, 3> coef{1.0, 0.0, 0.0};
-  std::array<double, 3> factor{};
+  std::array<int, N> node{};
+  std::array<double, N> coef{1.0};  // {1, 0, ...}
+  std::array<double, N> factor{};
 };
+using Stencil = StencilN<3>;
 
 struct SegmentProjection {
   double xi = 0.0;   // unclamped parameter of the projection along a -> b [-]
@@ -203,19 +207,27 @@ NodeSegment find_segment(const Surface& surf, int node, int tracked, const Start
   return walk(best);
 }
 
-// Axis-aligned bounding box of a surface at positions pos(j), grown by `margin`.
-struct Box2 {
-  Vec2 lo = Vec2::Zero(), hi = Vec2::Zero();
-  bool contains(const Vec2& x) const {
-    return x.x() >= lo.x() && x.x() <= hi.x() && x.y() >= lo.y() && x.y() <= hi.y();
+// Axis-aligned bounding box of a surface at positions pos(j), grown by `margin`, in dimension D.
+// A point with a NaN coordinate is in no box.
+template <int D>
+struct BoxD {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  Vec lo = Vec::Zero(), hi = Vec::Zero();
+  bool contains(const Vec& x) const {
+    for (int i = 0; i < D; ++i)
+      if (!(x[i] >= lo[i] && x[i] <= hi[i])) return false;
+    return true;
   }
 };
-template <class Pos>
-Box2 surface_box(const Surface& surf, const Pos& pos, double margin) {
-  Box2 b{Vec2::Constant(std::numeric_limits<double>::infinity()),
-         Vec2::Constant(-std::numeric_limits<double>::infinity())};
+using Box2 = BoxD<2>;
+// Any surface type with the list of its nodes (`nodes`): Surface, Surface3 (body_contact3.hpp).
+template <class S, class Pos>
+auto surface_box(const S& surf, const Pos& pos, double margin) {
+  using Vec = std::decay_t<decltype(pos(0))>;
+  BoxD<Vec::RowsAtCompileTime> b{Vec::Constant(std::numeric_limits<double>::infinity()),
+                                 Vec::Constant(-std::numeric_limits<double>::infinity())};
   for (int j : surf.nodes) {
-    const Vec2 x = pos(j);
+    const Vec x = pos(j);
     b.lo = b.lo.cwiseMin(x);
     b.hi = b.hi.cwiseMax(x);
   }

@@ -150,6 +150,7 @@ double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                                  const std::vector<typename Space<M::kDim>::Surface>&,                           \
                                  const std::vector<ContactCandidate>&, const Eigen::VectorXd&);
 RICOCHET_CONTACT_SET_FOR(Model)
+RICOCHET_CONTACT_SET_FOR(Model3)
 #undef RICOCHET_CONTACT_SET_FOR
 
 }  // namespace ricochet

@@ -30,6 +30,8 @@
 #include "solver/contact/contact_space.hpp"
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/obstacle.hpp"
+#include "solver/contact/obstacle3.hpp"
+#include "solver/model/model3.hpp"
 
 namespace ricochet {
 
@@ -47,6 +49,26 @@ struct Space<2> {
   using Stencil = ricochet::Stencil;
   using Surface = ricochet::Surface;
   using Box = Box2;
+};
+// The master surface of a 3D body pair: its boundary faces (BodyInfo3::boundary_faces) and
+// their nodes. Contact between bodies in 3D (node to face) is not there yet: make_contact_set
+// rejects body pairs for a Model3, so no Surface3 is made; the type completes Space<3> for the
+// dimension-generic code (update_boxes, penetration).
+struct Surface3 {
+  int body = 0;
+  std::vector<BoundaryFace> faces;
+  std::vector<int> nodes;
+  double max_length = 0.0;  // [m]
+};
+template <>
+struct Space<3> {
+  using Vec = Vec3;
+  using Local = LocalPair3d;
+  using Obstacle = Obstacle3;
+  using ObstacleContact = ObstacleContact3;
+  using Stencil = StencilN<5>;  // a node and the 4 corners of a quadrilateral face
+  using Surface = Surface3;
+  using Box = BoxD<3>;
 };
 // The obstacle type of a model type.
 template <class M>

@@ -51,4 +51,38 @@ inline double tangential_sum_term(const LocalPair& r) { return r.t; }
 // motion, before `scale`): -r_t scale slip [J], >= 0 by the cone.
 inline double slip_work(const LocalPair& r, double scale, double slip) { return -r.t * scale * slip; }
 
+// 3D: the frame of contact_frame_3d(n) (coulomb3d.hpp: t1, t2, n orthonormal, right-handed,
+// built from n alone), the local pair LocalPair3d (r_n; r_t on (t1, t2)).
+template <>
+struct ContactFrame<3> {
+  Vec3 n, t1, t2;
+  explicit ContactFrame(const Vec3& normal) {
+    const Frame3d f = contact_frame_3d(normal);
+    n = f.n;
+    t1 = f.t1;
+    t2 = f.t2;
+  }
+  // r_n n + r_t1 t1 + r_t2 t2 [N] (to_global_3d)
+  Vec3 global(const LocalPair3d& r) const { return r.n * n + r.t.x() * t1 + r.t.y() * t2; }
+  // (n . v, (t1 . v, t2 . v)) (to_local_3d)
+  LocalPair3d local(const Vec3& v) const { return {n.dot(v), Vec2(t1.dot(v), t2.dot(v))}; }
+  // (t1 . v, t2 . v)
+  Vec2 tangential(const Vec3& v) const { return Vec2(t1.dot(v), t2.dot(v)); }
+};
+
+// The 3D counterparts of the 2D helpers above; the tangential part is a 2-vector of the tangent
+// plane and |.| is tangential_norm_3d (hypot).
+inline double local_distance(const LocalPair3d& a, const LocalPair3d& b) {
+  return std::hypot(a.n - b.n, tangential_norm_3d(a.t - b.t));
+}
+inline double tangential_abs(const Vec2& t) { return tangential_norm_3d(t); }
+// The value of magnitude `cap` along t (t != 0: called only when |t| > cap >= 0).
+inline Vec2 tangential_clamp(double cap, const Vec2& t) { return cap * (t / tangential_norm_3d(t)); }
+inline double tangential_dot(const Vec2& a, const Vec2& b) { return a.dot(b); }
+// In 3D a reaction's share of ContactStep::tangential_force is its magnitude |r_t| [N]: the
+// tangents of different contacts are different directions, so only magnitudes add up to a
+// scalar (the history's tangential_force column is then >= 0).
+inline double tangential_sum_term(const LocalPair3d& r) { return tangential_norm_3d(r.t); }
+inline double slip_work(const LocalPair3d& r, double scale, const Vec2& slip) { return -scale * r.t.dot(slip); }
+
 }  // namespace ricochet

@@ -21,6 +21,11 @@ double penalty_bulk_modulus(const Material& material) {
       material);
 }
 
+double penalty_bulk_modulus(const Material3& material) {
+  // Every 3D law stores its small-strain lambda and mu (material3d.hpp).
+  return std::visit([](const auto& m) { return m.lambda + 2.0 * m.shear_modulus / 3.0; }, material);
+}
+
 namespace {
 
 // k_s / f_si = K l^2 e / A_c of one boundary segment (its length l, its cell's area A_c).
@@ -38,6 +43,25 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
       const double ks = segment_stiffness_per_scale(model, body, e, bulk);
       k[e.a] += 0.5 * ks;
       k[e.b] += 0.5 * ks;
+    }
+  }
+  return k;
+}
+
+// The same in 3D, LS-DYNA's solid-segment stiffness: per boundary face k_s / f_si = K A^2 / V,
+// A the face's reference area (a quadrilateral's |d13 x d24| / 2, exact for a flat face; a
+// triangle's |e1 x e2| / 2), V its cell's reference volume; each of the face's corners gets
+// k_s / corners. (2D is this with A = l e, V = A_c e.)
+std::vector<double> nodal_stiffness_per_scale(const Model3& model) {
+  std::vector<double> k(model.num_nodes(), 0.0);
+  for (const BodyInfo3& body : model.bodies) {
+    const double bulk = penalty_bulk_modulus(body.material);
+    for (const BoundaryFace& f : body.boundary_faces) {
+      auto x = [&](int a) -> Vec3 { return model.ref.col(f.nodes[a]); };
+      const Vec3 normal2 = f.corners == 4 ? Vec3((x(2) - x(0)).cross(x(3) - x(1))) : Vec3((x(1) - x(0)).cross(x(2) - x(0)));
+      const double area = 0.5 * normal2.norm();
+      const double ks = bulk * area * area / f.cell_volume;
+      for (int a = 0; a < f.corners; ++a) k[f.nodes[a]] += ks / f.corners;
     }
   }
   return k;
@@ -216,6 +240,7 @@ void penalty_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
   template double penalty_critical_dt<M>(const M&, const PenaltyContactT<M::kDim>&);                           \
   template void penalty_phase<M>(const M&, const std::vector<ObstacleOf<M>>&, PenaltyContactT<M::kDim>&, State&);
 RICOCHET_PENALTY_FOR(Model)
+RICOCHET_PENALTY_FOR(Model3)
 #undef RICOCHET_PENALTY_FOR
 
 }  // namespace ricochet

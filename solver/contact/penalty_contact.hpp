@@ -90,6 +90,7 @@ inline double combined_critical_dt(double dt_e, double dt_p) {
 
 // Bulk modulus used by the penalty stiffness: the 3D K = lambda + 2 mu / 3 [Pa] (see above).
 double penalty_bulk_modulus(const Material& material);
+double penalty_bulk_modulus(const Material3& material);
 
 // The contact set (make_contact_set) with each candidate's stiffness k_i from `settings`, and
 // every working array allocated.

@@ -139,6 +139,15 @@ struct Model3 {
   }
 };
 
+// fn(block) for every element block (conn, first_cell, body), whatever its formulation (the
+// 2D for_each_cell_block of model.hpp).
+template <class Fn>
+void for_each_cell_block(const Model3& model, Fn&& fn) {
+  for (const auto& b : model.hex8_full) fn(b);
+  for (const auto& b : model.hex8_hourglass) fn(b);
+  for (const auto& b : model.tet4) fn(b);
+}
+
 // Builds the model: per body its nodes (after the previous bodies'), a block of its hexahedra
 // (2x2x2 or one point, BodyInput3::hex_element) and one of its tetrahedra, the row-sum lumped
 // masses (hex8_lumped_masses, tet4_lumped_masses), cell_dt = L_e / c_p of each cell

@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "solver/elements/internal_forces3.hpp"
 #include "solver/observers/observers.hpp"
 
 namespace ricochet {
@@ -525,5 +526,6 @@ void RunMonitorT<M>::finish(const State& s) {
 }
 
 template class RunMonitorT<Model>;
+template class RunMonitorT<Model3>;
 
 }  // namespace ricochet

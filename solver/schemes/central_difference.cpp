@@ -2,6 +2,8 @@
 
 #include <omp.h>
 
+#include "solver/elements/internal_forces3.hpp"
+
 namespace ricochet {
 namespace {
 
@@ -126,5 +128,8 @@ void update(State& s) {
 template State initial_state<Model>(const Model&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
                                     const std::vector<NodalLoad>&);
 template void evaluate<Model>(const Model&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
+template State initial_state<Model3>(const Model3&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
+                                     const std::vector<NodalLoad>&);
+template void evaluate<Model3>(const Model3&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
 
 }  // namespace ricochet

@@ -110,5 +110,6 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
 }
 
 template RunResult run_explicit<Model>(const Model&, const RunSettings&, const ProgressFn&);
+template RunResult run_explicit<Model3>(const Model3&, const RunSettings&, const ProgressFn&);
 
 }  // namespace ricochet

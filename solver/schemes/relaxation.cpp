@@ -48,7 +48,7 @@ bool run_relaxation(RelaxationT<M>& r, const Eigen::VectorXd& u_start, Relaxatio
   report = r.report();
   report.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   report.settlement = largest_move<M::kDim>(r.state().u, u_start);
-  return status == Relaxation::Status::converged;
+  return status == Status::converged;
 }
 
 }  // namespace
@@ -201,5 +201,10 @@ template class RelaxationT<Model>;
 template bool relax_explicit_start<Model>(const Model&, const RunSettings&, RelaxationContactT<2>, State&,
                                           RelaxationReport&);
 template bool relax_displacement<Model>(const Model&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
+template double relaxation_step<Model3>(const Model3&, const RunSettings&, bool);
+template class RelaxationT<Model3>;
+template bool relax_explicit_start<Model3>(const Model3&, const RunSettings&, RelaxationContactT<3>, State&,
+                                           RelaxationReport&);
+template bool relax_displacement<Model3>(const Model3&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
 
 }  // namespace ricochet

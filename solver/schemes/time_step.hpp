@@ -79,6 +79,8 @@ class StepControlT {
 
 template <>
 double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
+template <>
+double StepControlT<Model3>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
 using StepControl = StepControlT<Model>;
 
 }  // namespace ricochet
