@@ -1294,7 +1294,9 @@ void expect_complete_run_folder(const fs::path& f) {
 // sweep's run ends with it (no orphan keeps writing), the resumed sweep reuses the finished run
 // and runs each other run once, in one process per folder, and every run folder ends complete.
 TEST_F(SweepTest, SigkilledSweepLeavesNoOrphanAndResumesWithOneWriterPerRun) {
-  write("slow.toml", slow_case(0.25));
+  // About 2 s a run (40 x 20 cells, 1e5 steps): 0.25 s of simulated time (0.55 s a run) left the
+  // 0.5 s below too close to a run's end on a lightly loaded machine.
+  write("slow.toml", slow_case(1.0));
   const std::string file = write("kill.toml", R"(
 name = "kill"
 base = "slow.toml"

@@ -3,8 +3,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
+
+#include <Eigen/Geometry>
 
 #include "harness/input/case_spec.hpp"
+#include "harness/input/gmsh_reader.hpp"
 #include "harness/input/run_plan.hpp"
 #include "harness/input/suggest.hpp"
 #include "harness/input/toml_reader.hpp"
@@ -30,13 +34,30 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
     std::filesystem::path p = t.text("file");
     if (p.is_relative()) p = dir / p;
     m.source = GmshFile{p};
+    // Its cells say (an unreadable file counts as 2D here; building it reports the error).
+    m.dimension = gmsh_dimension(p) == 3 ? 3 : 2;
     for (const char* key : {"distort", "seed"})
       if (t.has(key))
         t.fail(key, "applies to generated meshes only (generator = \"rectangle\", \"arc_plate\", \"disk\"), "
                     "not to a mesh file");
   } else {
-    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk"});
-    if (gen == "rectangle") {
+    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk", "box"});
+    if (gen == "box") {
+      BoxSpec b;
+      b.size = t.vec("size", 3);
+      for (int k = 0; k < 3; ++k)
+        if (!(b.size[k] > 0.0)) t.fail("size", "each of [lx, ly, lz] must be > 0");
+      b.nx = static_cast<int>(t.integer("nx", 1, 1, kMaxDivisions));
+      b.ny = static_cast<int>(t.integer("ny", 1, 1, kMaxDivisions));
+      b.nz = static_cast<int>(t.integer("nz", 1, 1, kMaxDivisions));
+      b.origin = t.vec("origin", 3, Vec3::Zero());
+      b.tetrahedra = t.choice("cells", "hex", {"hex", "tet"}) == "tet";
+      m.source = b;
+      m.dimension = 3;
+      if (t.has("distort"))
+        t.fail("distort", "applies to the 2D generators (\"rectangle\", \"arc_plate\", \"disk\", also when "
+                          "extruded); allowed for \"box\": none");
+    } else if (gen == "rectangle") {
       RectangleSpec r;
       r.width = t.number("width", Range::positive());
       r.height = t.number("height", Range::positive());
@@ -66,13 +87,33 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
       m.source = a;
     }
     // Interior nodes moved at random by up to distort x the local element size (distort_mesh).
-    m.distort = t.number("distort", 0.0, Range{0.0, 0.5, false, true});
-    m.seed = static_cast<std::uint64_t>(t.integer("seed", 1, 0, std::numeric_limits<long>::max()));
+    if (m.dimension == 2) {
+      m.distort = t.number("distort", 0.0, Range{0.0, 0.5, false, true});
+      m.seed = static_cast<std::uint64_t>(t.integer("seed", 1, 0, std::numeric_limits<long>::max()));
+    }
+  }
+  // A 2D mesh through a thickness: extrude = {thickness = T, layers = N}.
+  if (const auto ex = t.table("extrude")) {
+    if (m.dimension == 3)
+      t.fail("extrude", "applies to 2D meshes (the 2D generators or a 2D Gmsh file); this mesh is 3D already");
+    ExtrusionSpec e;
+    e.thickness = ex->number("thickness", Range::positive());
+    e.layers = static_cast<int>(ex->integer("layers", 1, 1, kMaxDivisions));
+    ex->finish();
+    m.extrude = e;
+    m.dimension = 3;
   }
   m.scale = t.number("scale", 1.0, Range::positive());
   m.rotate = t.number("rotate", 0.0, Range::closed(-360.0, 360.0));
-  m.rotate_about = t.vec2("rotate_about", Vec2::Zero());
-  m.offset = t.vec2("offset", Vec2::Zero());
+  if (m.dimension == 3) {
+    m.rotate_axis = t.vec("rotate_axis", 3, Vec3::UnitZ());
+    if (!(m.rotate_axis.norm() > 0.0)) t.fail("rotate_axis", "must be a non-zero vector");
+    m.rotate_axis.normalize();
+  } else if (t.has("rotate_axis")) {
+    t.fail("rotate_axis", "applies to 3D meshes (a 2D mesh turns about z: rotate and rotate_about)");
+  }
+  m.rotate_about = t.vec("rotate_about", m.dimension, Vec3::Zero());
+  m.offset = t.vec("offset", m.dimension, Vec3::Zero());
   t.finish();
   return m;
 }
@@ -97,17 +138,24 @@ MaterialSpec read_material(const TableReader& t) {
   return m;
 }
 
-BodySpec read_body(const TableReader& t, int index, const std::string& default_mesh) {
+BodySpec read_body(const TableReader& t, int index, const std::string& default_mesh, int dim) {
   BodySpec b;
   b.where = t.path();
   b.name = t.text("name", "body" + std::to_string(index));
   b.mesh = t.text("mesh", default_mesh);
   if (b.mesh.empty()) t.fail("mesh", "missing: name a mesh of [meshes] here or set the top-level key 'mesh'");
-  b.element = t.choice("element", "q4", {"q4", "q4_hourglass"});
-  b.thickness = t.number("thickness", 1.0, Range::positive());
-  b.velocity = t.vec2("velocity", Vec2::Zero());
-  b.angular_velocity = t.number("angular_velocity", 0.0, Range{});
-  if (t.has("rotation_center")) b.rotation_center = t.vec2("rotation_center", Vec2::Zero());
+  if (dim == 2) {
+    b.element = t.choice("element", "q4", {"q4", "q4_hourglass"});
+    b.thickness = t.number("thickness", 1.0, Range::positive());
+    b.angular_velocity.z() = t.number("angular_velocity", 0.0, Range{});
+  } else {
+    b.element = t.choice("element", "hex8", {"hex8", "hex8_hourglass"});
+    if (t.has("thickness"))
+      t.fail("thickness", "applies to 2D bodies (a 3D body's mesh has its own thickness: extrude = {thickness, layers})");
+    b.angular_velocity = t.vec("angular_velocity", 3, Vec3::Zero());
+  }
+  b.velocity = t.vec("velocity", dim, Vec3::Zero());
+  if (t.has("rotation_center")) b.rotation_center = t.vec("rotation_center", dim);
   const auto mat = t.table("material");
   if (!mat) t.fail("material", "missing required table [bodies.material]");
   b.material = read_material(*mat);
@@ -122,9 +170,17 @@ BodySpec read_body(const TableReader& t, int index, const std::string& default_m
     BoxNodeSet s;
     s.name = ns.text("name");
     const std::vector<double> box = ns.numbers("box", Range{});
-    if (box.size() != 4 || !(box[0] <= box[2]) || !(box[1] <= box[3]))
-      ns.fail("box", "expected [xmin, ymin, xmax, ymax] with xmin <= xmax and ymin <= ymax");
-    s.box = Eigen::Vector4d(box[0], box[1], box[2], box[3]);
+    if (dim == 2) {
+      if (box.size() != 4 || !(box[0] <= box[2]) || !(box[1] <= box[3]))
+        ns.fail("box", "expected [xmin, ymin, xmax, ymax] with xmin <= xmax and ymin <= ymax");
+      s.lo = Vec3(box[0], box[1], 0.0);
+      s.hi = Vec3(box[2], box[3], 0.0);
+    } else {
+      if (box.size() != 6 || !(box[0] <= box[3]) || !(box[1] <= box[4]) || !(box[2] <= box[5]))
+        ns.fail("box", "expected [xmin, ymin, zmin, xmax, ymax, zmax] with each min <= its max");
+      s.lo = Vec3(box[0], box[1], box[2]);
+      s.hi = Vec3(box[3], box[4], box[5]);
+    }
     ns.finish();
     b.node_sets.push_back(s);
   }
@@ -132,7 +188,7 @@ BodySpec read_body(const TableReader& t, int index, const std::string& default_m
   return b;
 }
 
-BoundarySpec read_boundary(const TableReader& t, const std::string& first_body) {
+BoundarySpec read_boundary(const TableReader& t, const std::string& first_body, int dim) {
   BoundarySpec b;
   b.where = t.path();
   b.body = t.text("body", first_body);
@@ -144,19 +200,27 @@ BoundarySpec read_boundary(const TableReader& t, const std::string& first_body) 
   if (t.has("y")) b.y = t.number("y", Range{});
   t.number("x", 0.0, Range{});  // marks x and y as known keys when absent
   t.number("y", 0.0, Range{});
+  if (dim == 3) {
+    if (t.has("z")) b.z = t.number("z", Range{});
+    t.number("z", 0.0, Range{});
+  }
   b.ramp = t.number("ramp", 0.0, Range::non_negative());
-  if (!b.x && !b.y) t.fail("x", "missing: give x, y or both (a prescribed value per direction)");
+  if (!b.x && !b.y && !b.z)
+    t.fail("x", dim == 2 ? "missing: give x, y or both (a prescribed value per direction)"
+                         : "missing: give at least one of x, y, z (a prescribed value per direction)");
   t.finish();
   return b;
 }
 
-InitialVelocitySpec read_initial_velocity(const TableReader& t, const std::string& first_body) {
+InitialVelocitySpec read_initial_velocity(const TableReader& t, const std::string& first_body, int dim) {
   InitialVelocitySpec v;
   v.where = t.path();
   v.body = t.text("body", first_body);
   v.nodes = t.text("nodes");
-  v.velocity = t.vec2("velocity", Vec2::Zero());
-  if (!t.has("velocity")) t.fail("velocity", "missing required key: the nodes' initial velocity [x, y] in m/s");
+  v.velocity = t.vec("velocity", dim, Vec3::Zero());
+  if (!t.has("velocity"))
+    t.fail("velocity", std::string("missing required key: the nodes' initial velocity ") +
+                           (dim == 2 ? "[x, y]" : "[x, y, z]") + " in m/s");
   t.finish();
   return v;
 }
@@ -169,13 +233,15 @@ void check_column_name(const TableReader& t, const std::string& name) {
   if (name.empty()) t.fail("name", "must not be empty (it names CSV columns)");
 }
 
-LoadSpec read_load(const TableReader& t, const std::string& first_body) {
+LoadSpec read_load(const TableReader& t, const std::string& first_body, int dim) {
   LoadSpec l;
   l.where = t.path();
   l.body = t.text("body", first_body);
   l.nodes = t.text("nodes");
-  if (!t.has("force")) t.fail("force", "missing required key: the total force [x, y] in N on the node set");
-  l.force = t.vec2("force");
+  if (!t.has("force"))
+    t.fail("force", std::string("missing required key: the total force ") + (dim == 2 ? "[x, y]" : "[x, y, z]") +
+                        " in N on the node set");
+  l.force = t.vec("force", dim);
   l.by_mass = t.choice("distribution", "mass", {"mass", "equal"}) == "mass";
   l.start = t.number("start", 0.0, Range::non_negative());
   l.ramp = t.number("ramp", 0.0, Range::non_negative());
@@ -183,13 +249,13 @@ LoadSpec read_load(const TableReader& t, const std::string& first_body) {
   return l;
 }
 
-ProbeSpec read_probe(const TableReader& t, const std::string& first_body) {
+ProbeSpec read_probe(const TableReader& t, const std::string& first_body, int dim) {
   ProbeSpec p;
   p.where = t.path();
   p.name = t.text("name");
   check_column_name(t, p.name);
   p.body = t.text("body", first_body);
-  if (t.has("point")) p.point = t.vec2("point");
+  if (t.has("point")) p.point = t.vec("point", dim);
   p.node_set = t.text("node_set", "");
   if (p.point.has_value() == !p.node_set.empty())
     t.fail("point", "give exactly one of 'point' (nearest node) or 'node_set' (its first node)");
@@ -223,6 +289,23 @@ std::vector<Vec2, Eigen::aligned_allocator<Vec2>> read_points(const TableReader&
   return pts;
 }
 
+// An obstacle's friction keys, then its keys checked against those of its type, `keys`
+// (TableReader::finish() would not know `points` or `axes`, read from the raw node).
+void read_obstacle_friction_and_keys(const TableReader& t, ObstacleSpec& o, const std::string& type,
+                                     const std::vector<std::string>& keys) {
+  o.friction = t.number("friction", 0.0, Range::non_negative());
+  if (const auto by_body = t.table("friction_by_body")) {
+    for (const auto& body : by_body->keys()) o.friction_by_body[body] = by_body->number(body, Range::non_negative());
+    by_body->finish();
+  }
+  for (const auto& key : t.keys()) {
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    std::string allowed;
+    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
+    t.fail(key, "unknown key for type = \"" + type + "\"" + did_you_mean(key, keys) + "; allowed here: " + allowed);
+  }
+}
+
 // `raw_points`: the obstacle's `points` node, if any (read from the document directly).
 ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* raw_points) {
   ObstacleSpec o;
@@ -253,19 +336,70 @@ ObstacleSpec read_obstacle(const TableReader& t, int index, const toml::node* ra
     keys.insert(keys.end(), {"points", "side"});
   }
   o.shape.name = o.name;
-  o.friction = t.number("friction", 0.0, Range::non_negative());
-  if (const auto by_body = t.table("friction_by_body")) {
-    for (const auto& body : by_body->keys()) o.friction_by_body[body] = by_body->number(body, Range::non_negative());
-    by_body->finish();
-  }
-  // Keys per type (TableReader::finish() would not know `points`, read from the raw node).
-  for (const auto& key : t.keys()) {
-    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
-    std::string allowed;
-    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
-    t.fail(key, "unknown key for type = \"" + type + "\"" + did_you_mean(key, keys) + "; allowed here: " + allowed);
-  }
+  read_obstacle_friction_and_keys(t, o, type, keys);
   if (const std::string e = obstacle_error(o.shape); !e.empty()) t.fail("type", e);
+  return o;
+}
+
+// A 3D obstacle (docs/case-format.md, 3D cases): plane, sphere, box or cylinder. `raw_axes`: the
+// box's `axes` node, if any (an array of two [x, y, z], read from the document directly).
+ObstacleSpec read_obstacle3(const TableReader& t, int index, const toml::node* raw_axes) {
+  ObstacleSpec o;
+  o.where = t.path();
+  o.name = t.text("name", "obstacle" + std::to_string(index));
+  check_column_name(t, o.name);
+  const std::string type = t.choice("type", "plane", {"plane", "sphere", "box", "cylinder"});
+  std::vector<std::string> keys{"name", "type", "friction", "friction_by_body"};
+  auto positive = [&](const char* key) {
+    const Vec3 v = t.vec(key, 3);
+    for (int k = 0; k < 3; ++k)
+      if (!(v[k] > 0.0)) t.fail(key, "each of its three values must be > 0");
+    return v;
+  };
+  try {
+    if (type == "plane") {
+      const Vec3 point = t.vec("point", 3, Vec3::Zero());
+      const Vec3 normal = t.vec("normal", 3);
+      if (!(normal.norm() > 0.0)) t.fail("normal", "must be a non-zero vector (the outward normal)");
+      o.shape3 = make_plane_obstacle3(o.name, point, normal);
+      keys.insert(keys.end(), {"point", "normal"});
+    } else if (type == "sphere") {
+      o.shape3 = make_sphere_obstacle3(o.name, t.vec("center", 3), t.number("radius", Range::positive()),
+                                       t.boolean("inside", false));
+      keys.insert(keys.end(), {"center", "radius", "inside"});
+    } else if (type == "box") {
+      Vec3 axis[2] = {Vec3::UnitX(), Vec3::UnitY()};
+      if (raw_axes) {
+        const toml::array* a = raw_axes->as_array();
+        if (!a || a->size() != 2) t.fail("axes", "expected two directions [[x, y, z], [x, y, z]]");
+        for (int k = 0; k < 2; ++k) {
+          const toml::array* q = (*a)[static_cast<std::size_t>(k)].as_array();
+          if (!q || q->size() != 3) t.fail("axes", "element " + std::to_string(k) + ": expected a direction [x, y, z]");
+          for (int d = 0; d < 3; ++d) {
+            const std::optional<double> x = exact_number((*q)[static_cast<std::size_t>(d)]);
+            if (!x || !std::isfinite(*x)) t.fail("axes", "element " + std::to_string(k) + ": expected three finite numbers");
+            axis[k][d] = *x;
+          }
+          if (!(axis[k].norm() > 0.0)) t.fail("axes", "element " + std::to_string(k) + ": must be a non-zero vector");
+        }
+      }
+      o.shape3 = make_box_obstacle3(o.name, t.vec("center", 3), positive("half_extents"), t.boolean("inside", false),
+                                    axis[0], axis[1]);
+      keys.insert(keys.end(), {"center", "half_extents", "axes", "inside"});
+    } else {
+      const Vec3 axis = t.vec("axis", 3);
+      if (!(axis.norm() > 0.0)) t.fail("axis", "must be a non-zero vector (the cylinder's axis)");
+      const double half_length =
+          t.has("half_length") ? t.number("half_length", Range::positive()) : std::numeric_limits<double>::infinity();
+      o.shape3 = make_cylinder_obstacle3(o.name, t.vec("center", 3), axis, t.number("radius", Range::positive()),
+                                         t.boolean("inside", false), half_length);
+      keys.insert(keys.end(), {"center", "axis", "radius", "half_length", "inside"});
+    }
+  } catch (const std::invalid_argument& e) {
+    t.fail("type", e.what());
+  }
+  read_obstacle_friction_and_keys(t, o, type, keys);
+  if (const std::string e = obstacle_error(o.shape3); !e.empty()) t.fail("type", e);
   return o;
 }
 
@@ -283,9 +417,6 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   c.name = root.text("name", std::filesystem::path(file).stem().string());
   c.description = root.text("description", "");
   c.scheme = scheme_from_name(root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"}));
-  c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress
-                                                                              : PlaneMode::strain;
-  c.gravity = root.vec2("gravity", Vec2::Zero());
   c.default_mesh = root.text("mesh", "");
   c.threads = static_cast<int>(root.integer("threads", 0, 0, kMaxThreads));
 
@@ -298,6 +429,26 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   }
   meshes->finish();
   if (c.meshes.empty()) root.fail("meshes", "define at least one mesh as [meshes.NAME]");
+  // The case's dimension is its meshes': all 2D or all 3D.
+  c.dimension = c.meshes.begin()->second.dimension;
+  for (const auto& [name, m] : c.meshes)
+    if (m.dimension != c.dimension) {
+      const auto& first = *c.meshes.begin();
+      const TableReader mt = *meshes->table(name);
+      mt.fail(mt.has("file") ? "file" : "generator", "a " + std::to_string(m.dimension) + "D mesh in a case whose mesh \"" + first.first + "\" is " +
+                           std::to_string(c.dimension) + "D; a case is 2D or 3D throughout (a 2D mesh becomes 3D "
+                           "with extrude = {thickness, layers})");
+    }
+  if (c.dimension == 2) {
+    c.plane = root.choice("plane", "stress", {"stress", "strain"}) == "stress" ? PlaneMode::stress : PlaneMode::strain;
+  } else {
+    if (root.has("plane"))
+      root.fail("plane", "applies to 2D cases (plane stress or strain); this case's meshes are 3D");
+    if (c.scheme == Scheme::implicit)
+      root.fail("scheme", "\"implicit\" is 2D only so far; allowed in a 3D case: \"explicit\", \"semi_explicit\", "
+                          "\"explicit_penalty\"");
+  }
+  c.gravity = root.vec("gravity", c.dimension, Vec3::Zero());
   // A mesh name that is not defined: say which are, and the likely one.
   auto unknown_mesh = [&](const std::string& name) {
     std::vector<std::string> names;
@@ -313,17 +464,28 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   const auto bodies = root.tables("bodies");
   if (bodies.empty()) root.fail("bodies", "missing: define at least one [[bodies]]");
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    BodySpec b = read_body(bodies[i], static_cast<int>(i), c.default_mesh);
+    BodySpec b = read_body(bodies[i], static_cast<int>(i), c.default_mesh, c.dimension);
     if (!c.meshes.count(b.mesh)) bodies[i].fail("mesh", unknown_mesh(b.mesh));
     for (const auto& other : c.bodies)
       if (other.name == b.name) bodies[i].fail("name", "duplicate body name \"" + b.name + "\"");
     c.bodies.push_back(std::move(b));
   }
   const std::string first_body = c.bodies.front().name;
-  for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body));
+  for (const auto& t : root.tables("boundary")) c.boundaries.push_back(read_boundary(t, first_body, c.dimension));
   for (const auto& t : root.tables("initial_velocity"))
-    c.initial_velocities.push_back(read_initial_velocity(t, first_body));
-  for (const auto& t : root.tables("loads")) c.loads.push_back(read_load(t, first_body));
+    c.initial_velocities.push_back(read_initial_velocity(t, first_body, c.dimension));
+  for (const auto& t : root.tables("loads")) c.loads.push_back(read_load(t, first_body, c.dimension));
+  if (const auto sr = root.table("scene_rotation")) {
+    if (c.dimension != 3)
+      root.fail("scene_rotation", "applies to 3D cases (a 2D mesh turns in its plane: meshes.NAME.rotate)");
+    const Vec3 axis = sr->vec("axis", 3);
+    if (!(axis.norm() > 0.0)) sr->fail("axis", "must be a non-zero vector (the rotation's axis)");
+    const double angle = sr->number("angle", Range::closed(-360.0, 360.0));
+    sr->finish();
+    if (!c.boundaries.empty())
+      sr->fail("axis", "a case with [[boundary]] cannot be turned: its x, y, z are fixed global directions");
+    c.scene_rotation = Eigen::AngleAxisd(angle * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
+  }
   if (const auto rx = root.table("relaxation")) {
     c.relaxation.enabled = rx->boolean("enabled", true);
     c.relaxation.tolerance = rx->number("tolerance", 1e-6, Range{0.0, 0.1, true, false});
@@ -333,8 +495,13 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
 
   const auto obstacles = root.tables("obstacles");
   for (std::size_t i = 0; i < obstacles.size(); ++i) {
-    const toml::node* raw_points = doc["obstacles"][i]["points"].node();
-    c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i), raw_points));
+    if (c.dimension == 2) {
+      const toml::node* raw_points = doc["obstacles"][i]["points"].node();
+      c.obstacles.push_back(read_obstacle(obstacles[i], static_cast<int>(i), raw_points));
+    } else {
+      const toml::node* raw_axes = doc["obstacles"][i]["axes"].node();
+      c.obstacles.push_back(read_obstacle3(obstacles[i], static_cast<int>(i), raw_axes));
+    }
     for (const auto& [body, mu] : c.obstacles.back().friction_by_body) {
       bool known = false;
       for (const auto& b : c.bodies) known = known || b.name == body;
@@ -353,6 +520,8 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     cp.name = t.text("name", cp.slave + "_" + cp.master);
     check_column_name(t, cp.name);
     t.finish();
+    if (c.dimension == 3)
+      t.fail("slave", "contact between bodies is 2D only so far (node to segment); a 3D case may have [[obstacles]]");
     for (const char* key : {"slave", "master"}) {
       const std::string& name = std::string(key) == "slave" ? cp.slave : cp.master;
       bool known = false;
@@ -471,7 +640,7 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
                                          "allowed: \"none\" (or leave it out)");
     c.field_format.compression = compression == "zlib" ? VtuCompression::zlib : VtuCompression::none;
     for (const auto& p : out->tables("probes")) {
-      c.probes.push_back(read_probe(p, first_body));
+      c.probes.push_back(read_probe(p, first_body, c.dimension));
       for (std::size_t k = 0; k + 1 < c.probes.size(); ++k)
         if (c.probes[k].name == c.probes.back().name) p.fail("name", "duplicate probe name \"" + c.probes.back().name + "\"");
     }

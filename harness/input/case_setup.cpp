@@ -9,6 +9,8 @@
 #include <numbers>
 #include <utility>
 
+#include <Eigen/Geometry>
+
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/input/run_plan.hpp"
@@ -18,7 +20,8 @@
 namespace ricochet {
 namespace {
 
-Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
+// The 2D mesh of a 2D source (a 2D generator or Gmsh file) as generated or read, distorted.
+Mesh build_planar_source(const CaseSpec& c, const MeshSpec& m) {
   Mesh mesh;
   try {
     if (const auto* r = std::get_if<RectangleSpec>(&m.source))
@@ -39,29 +42,71 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
   } catch (const InputError& e) {
     throw InputError(c.file + ": " + m.where + ".distort: " + e.what());
   }
+  return mesh;
+}
+
+// Areas, volumes, masses and stiffnesses are squares and higher powers of lengths, which a
+// double must hold: the span of a mesh is kept within [1e-100, 1e100] m.
+template <class Nodes>
+void check_span(const CaseSpec& c, const MeshSpec& m, const Nodes& nodes) {
+  if (nodes.cols() == 0) return;
+  const double size = (nodes.rowwise().maxCoeff() - nodes.rowwise().minCoeff()).maxCoeff();
+  if (!(size >= 1e-100 && size <= 1e100)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3g", size);
+    throw InputError(c.file + ": " + m.where + (m.scale != 1.0 ? ".scale" : "") + ": the mesh spans " + buf +
+                     " m; allowed: 1e-100 ... 1e100 m (a double must hold the squares of its lengths)");
+  }
+}
+
+Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
+  Mesh mesh = build_planar_source(c, m);
   // x' = R (s x - c) + c + offset: scaled, rotated counterclockwise about c, translated.
+  const Vec2 about = m.rotate_about.head<2>(), offset = m.offset.head<2>();
   mesh.nodes *= m.scale;
   if (m.rotate != 0.0) {
     const double a = m.rotate * std::numbers::pi / 180.0;
     Mat2 r;
     r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    mesh.nodes.colwise() -= about;
+    mesh.nodes = (r * mesh.nodes).eval();
+    mesh.nodes.colwise() += about;
+  }
+  mesh.nodes.colwise() += offset;
+  check_span(c, m, mesh.nodes);
+  return mesh;
+}
+
+// A 3D mesh: the box generator, a 3D Gmsh file, or a 2D source extruded; then
+// x' = R (s x - c) + c + offset with R the rotation by `rotate` degrees about rotate_axis
+// (right-handed), c = rotate_about.
+Mesh3 build_mesh3(const CaseSpec& c, const MeshSpec& m) {
+  Mesh3 mesh;
+  try {
+    if (const auto* b = std::get_if<BoxSpec>(&m.source))
+      mesh = make_box(*b);
+    else if (const auto* g = std::get_if<GmshFile>(&m.source); g && !m.extrude)
+      mesh = read_gmsh3(g->path);
+  } catch (const InputError& e) {
+    throw InputError(c.file + ": " + m.where + ": " + e.what());
+  }
+  if (m.extrude) {
+    const Mesh planar = build_planar_source(c, m);
+    try {
+      mesh = extrude(planar, m.extrude->thickness, m.extrude->layers);
+    } catch (const InputError& e) {
+      throw InputError(c.file + ": " + m.where + ".extrude: " + e.what());
+    }
+  }
+  mesh.nodes *= m.scale;
+  if (m.rotate != 0.0) {
+    const Mat3 r = Eigen::AngleAxisd(m.rotate * std::numbers::pi / 180.0, m.rotate_axis).toRotationMatrix();
     mesh.nodes.colwise() -= m.rotate_about;
     mesh.nodes = (r * mesh.nodes).eval();
     mesh.nodes.colwise() += m.rotate_about;
   }
   mesh.nodes.colwise() += m.offset;
-  // Areas, masses and stiffnesses are squares and higher powers of lengths, which a double
-  // must hold: the span of a mesh is kept within [1e-100, 1e100] m.
-  if (mesh.num_nodes() > 0) {
-    const Vec2 span = mesh.nodes.rowwise().maxCoeff() - mesh.nodes.rowwise().minCoeff();
-    const double size = span.maxCoeff();
-    if (!(size >= 1e-100 && size <= 1e100)) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.3g", size);
-      throw InputError(c.file + ": " + m.where + (m.scale != 1.0 ? ".scale" : "") + ": the mesh spans " + buf +
-                       " m; allowed: 1e-100 ... 1e100 m (a double must hold the squares of its lengths)");
-    }
-  }
+  check_span(c, m, mesh.nodes);
   return mesh;
 }
 
@@ -73,7 +118,8 @@ Material make_material(const MaterialSpec& m, PlaneMode plane) {
   return StVenantKirchhoff::make(m.young, m.poisson, m.density, plane);
 }
 
-std::string set_names(const Mesh& m) {
+template <class MeshT>
+std::string set_names(const MeshT& m) {
   std::string s;
   for (const auto& [name, nodes] : m.node_sets) s += (s.empty() ? "" : ", ") + name;
   return s.empty() ? "(none)" : s;
@@ -85,7 +131,8 @@ int body_index(const CaseSpec& c, const std::string& name, const std::string& wh
   throw InputError(c.file + ": " + where + "." + key + ": no body named \"" + name + "\"");
 }
 
-const std::vector<int>& node_set(const CaseSpec& c, const Mesh& m, const std::string& name,
+template <class MeshT>
+const std::vector<int>& node_set(const CaseSpec& c, const MeshT& m, const std::string& name,
                                  const std::string& where, const char* key) {
   const auto it = m.node_sets.find(name);
   if (it == m.node_sets.end())
@@ -99,15 +146,22 @@ const std::vector<int>& node_set(const CaseSpec& c, const Mesh& m, const std::st
 // error, not a divergence at t = 0: the first line that names what, where and how deep.
 // Tolerance: depth > 1e-9 of the body's size (the diagonal of its reference bounding box), so
 // a node placed on a surface (a gap of 0 up to round-off) is not reported.
-double body_size(const Model& model, const BodyInfo& b) {
+template <class M, class Body>
+double body_size(const M& model, const Body& b) {
   const auto x = model.ref.middleCols(b.first_node, b.num_nodes);
   return (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
 }
 
-std::string point_text(const Vec2& x) {
-  char buf[80];
-  std::snprintf(buf, sizeof buf, "(%.6g, %.6g)", x.x(), x.y());
-  return buf;
+// "(x, y)" or "(x, y, z)", each "%.6g".
+template <class V>
+std::string point_text(const V& x) {
+  std::string s = "(";
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.6g", x[k]);
+    s += (k ? ", " : "") + std::string(buf);
+  }
+  return s + ")";
 }
 
 std::string depth_text(double d) {
@@ -259,15 +313,17 @@ class BoundaryGrid {
   int query_ = 0;
 };
 
-void check_initial_penetration(const CaseSpec& c, const Model& model, const RunSettings& s) {
+// Nodes inside a rigid obstacle, in either dimension.
+template <class M>
+void check_obstacle_penetration(const CaseSpec& c, const M& model, const std::vector<ObstacleOf<M>>& obstacles) {
   for (std::size_t bi = 0; bi < model.bodies.size(); ++bi) {
-    const BodyInfo& b = model.bodies[bi];
+    const auto& b = model.bodies[bi];
     const double tol = 1e-9 * body_size(model, b);
-    for (std::size_t o = 0; o < s.obstacles.size(); ++o) {
+    for (std::size_t o = 0; o < obstacles.size(); ++o) {
       int worst = -1;
       double depth = tol;
       for (int node : b.boundary_nodes) {
-        const double d = -closest(s.obstacles[o], model.ref.col(node)).gap;
+        const double d = -closest(obstacles[o], model.ref.col(node)).gap;
         if (d > depth) depth = d, worst = node;
       }
       if (worst >= 0)
@@ -277,6 +333,10 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
                          depth_text(depth) + " deep (the deepest node); move the body or the obstacle");
     }
   }
+}
+
+void check_initial_penetration(const CaseSpec& c, const Model& model, const RunSettings& s) {
+  check_obstacle_penetration(c, model, s.obstacles);
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
     const BodyInfo& slave = model.bodies[s.body_pairs[k].slave];
     const BodyInfo& master = model.bodies[s.body_pairs[k].master];
@@ -296,74 +356,143 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
   }
 }
 
-}  // namespace
+// 3D: nodes inside a rigid obstacle (3D cases have no contact pairs yet).
+void check_initial_penetration(const CaseSpec& c, const Model3& model, const RunSettings& s) {
+  check_obstacle_penetration(c, model, s.obstacles3);
+}
 
-PreparedCase prepare_case(const CaseSpec& spec) {
-  PreparedCase p;
-  p.spec = spec;
+Material3 make_material3(const MaterialSpec& m) {
+  if (m.model == "neo_hookean") return NeoHookean3::make(m.young, m.poisson, m.density);
+  if (m.model == "blatz_ko") return BlatzKo3::make(m.shear_modulus, m.density);
+  if (m.model == "mooney_rivlin") return MooneyRivlin3::make(m.c10, m.c01, m.bulk_modulus, m.density);
+  return StVenantKirchhoff3::make(m.young, m.poisson, m.density);
+}
+
+// The body's `[[bodies.node_sets]]`: the nodes inside or on each box, in either dimension.
+template <class MeshT>
+void add_box_node_sets(const CaseSpec& c, const BodySpec& b, MeshT& mesh) {
+  const int d = static_cast<int>(mesh.nodes.rows());
+  for (const BoxNodeSet& s : b.node_sets) {
+    std::vector<int> nodes;
+    for (int i = 0; i < mesh.num_nodes(); ++i) {
+      bool in = true;
+      for (int k = 0; k < d; ++k) in = in && mesh.nodes(k, i) >= s.lo[k] && mesh.nodes(k, i) <= s.hi[k];
+      if (in) nodes.push_back(i);
+    }
+    if (nodes.empty())
+      throw InputError(c.file + ": " + b.where + ".node_sets: box of \"" + s.name + "\" selects no node");
+    mesh.node_sets[s.name] = std::move(nodes);
+  }
+}
+
+// The model of the case's bodies, with p's meshes: 2D (Model, p.meshes) or 3D (Model3, p.meshes3).
+void build_bodies(PreparedCase& p, Model& model) {
   const CaseSpec& c = p.spec;
-
-  check_mesh_plan(c);  // before a mesh is built: the generated meshes' memory
   std::vector<BodyInput> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
-    {
-      for (const BoxNodeSet& s : b.node_sets) {
-        std::vector<int> nodes;
-        for (int i = 0; i < mesh.num_nodes(); ++i) {
-          const Vec2 x = mesh.nodes.col(i);
-          if (x.x() >= s.box[0] && x.y() >= s.box[1] && x.x() <= s.box[2] && x.y() <= s.box[3])
-            nodes.push_back(i);
-        }
-        if (nodes.empty())
-          throw InputError(c.file + ": " + b.where + ".node_sets: box of \"" + s.name + "\" selects no node");
-        mesh.node_sets[s.name] = std::move(nodes);
-      }
-    }
+    add_box_node_sets(c, b, mesh);
     BodyInput in;
     in.name = b.name;
     in.material = make_material(b.material, c.plane);
     in.quad_element = b.element == "q4" ? QuadElement::full_2x2 : QuadElement::one_point_hourglass;
     in.hourglass = b.hourglass;
     in.thickness = b.thickness;
-    in.initial_velocity = b.velocity;
+    in.initial_velocity = b.velocity.head<2>();
     in.mesh = mesh;
     p.meshes.push_back(std::move(mesh));
     inputs.push_back(std::move(in));
   }
   try {
-    p.model = build_model(inputs, c.plane, c.gravity);
+    model = build_model(inputs, c.plane, c.gravity.head<2>());
   } catch (const std::invalid_argument& e) {
     throw InputError(c.file + ": bodies: " + e.what());
   }
+}
+
+void build_bodies(PreparedCase& p, Model3& model) {
+  const CaseSpec& c = p.spec;
+  std::vector<BodyInput3> inputs;
+  for (const BodySpec& b : c.bodies) {
+    Mesh3 mesh = build_mesh3(c, c.meshes.at(b.mesh));
+    add_box_node_sets(c, b, mesh);
+    if (c.scene_rotation) mesh.nodes = (*c.scene_rotation * mesh.nodes).eval();
+    BodyInput3 in;
+    in.name = b.name;
+    in.material = make_material3(b.material);
+    in.hex_element = b.element == "hex8" ? HexElement::full_2x2x2 : HexElement::one_point_hourglass;
+    in.hourglass = b.hourglass;
+    in.initial_velocity = c.turned(b.velocity);
+    in.mesh = mesh;
+    p.meshes3.push_back(std::move(mesh));
+    inputs.push_back(std::move(in));
+  }
+  try {
+    model = build_model3(inputs, c.turned(c.gravity));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.file + ": bodies: " + e.what());
+  }
+}
+
+const std::vector<Mesh>& meshes_of(const PreparedCase& p, const Model&) { return p.meshes; }
+const std::vector<Mesh3>& meshes_of(const PreparedCase& p, const Model3&) { return p.meshes3; }
+std::vector<Obstacle>& obstacles_in(RunSettings& s, const Model&) { return s.obstacles; }
+std::vector<Obstacle3>& obstacles_in(RunSettings& s, const Model3&) { return s.obstacles3; }
+const Obstacle& shape_of(const ObstacleSpec& o, const Model&) { return o.shape; }
+const Obstacle3& shape_of(const ObstacleSpec& o, const Model3&) { return o.shape3; }
+// An obstacle turned by the case's scene rotation (3D).
+const Obstacle& turned(const CaseSpec&, const Obstacle& o) { return o; }
+Obstacle3 turned(const CaseSpec& c, const Obstacle3& o) {
+  if (!c.scene_rotation) return o;
+  const Mat3& r = *c.scene_rotation;
+  Obstacle3 t = o;
+  t.point = r * o.point;
+  t.normal = r * o.normal;
+  t.center = r * o.center;
+  t.axes = r * o.axes;
+  t.axis = r * o.axis;
+  return t;
+}
+
+// Everything after the bodies, in either dimension D = M::kDim: initial velocities, prescribed
+// DOFs, loads, obstacles, contact, the time step, relaxation, probes.
+template <class M>
+void prepare_run(PreparedCase& p, M& model) {
+  constexpr int D = M::kDim;
+  using Vec = Eigen::Matrix<double, D, 1>;
+  const CaseSpec& c = p.spec;
+  const auto& meshes = meshes_of(p, model);
   // A spinning start: v = velocity + omega x (x - c) at every node of the body, c the given
   // centre or the body's centre of mass (lumped masses), so its linear momentum stays m v.
   for (std::size_t bi = 0; bi < c.bodies.size(); ++bi) {
-    const double omega = c.bodies[bi].angular_velocity;
-    if (omega == 0.0) continue;
-    const BodyInfo& b = p.model.bodies[bi];
-    Vec2 centre = Vec2::Zero();
+    const Vec3 omega = c.turned(c.bodies[bi].angular_velocity);
+    if (omega == Vec3::Zero()) continue;
+    const auto& b = model.bodies[bi];
+    Vec centre = Vec::Zero();
     if (c.bodies[bi].rotation_center) {
-      centre = *c.bodies[bi].rotation_center;
+      centre = c.turned(*c.bodies[bi].rotation_center).template head<D>();
     } else {
       double mass = 0.0;
       for (int i = b.first_node; i < b.first_node + b.num_nodes; ++i) {
-        centre += p.model.mass(2 * i) * p.model.ref.col(i);
-        mass += p.model.mass(2 * i);
+        centre += model.mass(D * i) * model.ref.col(i);
+        mass += model.mass(D * i);
       }
       centre /= mass;
     }
     for (int i = b.first_node; i < b.first_node + b.num_nodes; ++i) {
-      const Vec2 r = p.model.ref.col(i) - centre;
-      p.model.initial_velocity.segment<2>(2 * i) += omega * Vec2(-r.y(), r.x());
+      const Vec r = model.ref.col(i) - centre;
+      if constexpr (D == 2)
+        model.initial_velocity.template segment<2>(2 * i) += omega.z() * Vec2(-r.y(), r.x());
+      else
+        model.initial_velocity.template segment<3>(3 * i) += omega.cross(r);
     }
   }
   // [[initial_velocity]]: a node set's own velocity, in file order (a later one wins).
   for (const InitialVelocitySpec& iv : c.initial_velocities) {
     const int bi = body_index(c, iv.body, iv.where, "body");
-    const int node0 = p.model.bodies[bi].first_node;
-    for (int local : node_set(c, p.meshes[bi], iv.nodes, iv.where, "nodes"))
-      p.model.initial_velocity.segment<2>(2 * (node0 + local)) = iv.velocity;
+    const int node0 = model.bodies[bi].first_node;
+    for (int local : node_set(c, meshes[bi], iv.nodes, iv.where, "nodes"))
+      model.initial_velocity.template segment<D>(D * (node0 + local)) = c.turned(iv.velocity).template head<D>();
   }
 
   RunSettings& s = p.settings;
@@ -379,16 +508,16 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   std::map<int, std::string> prescribed_by;  // dof -> boundary key, to reject conflicts
   for (const BoundarySpec& b : c.boundaries) {
     const int bi = body_index(c, b.body, b.where, "body");
-    const int node0 = p.model.bodies[bi].first_node;
-    for (int local : node_set(c, p.meshes[bi], b.nodes, b.where, "nodes")) {
-      for (int k = 0; k < 2; ++k) {
-        const std::optional<double>& value = k == 0 ? b.x : b.y;
+    const int node0 = model.bodies[bi].first_node;
+    for (int local : node_set(c, meshes[bi], b.nodes, b.where, "nodes")) {
+      for (int k = 0; k < D; ++k) {
+        const std::optional<double>& value = k == 0 ? b.x : k == 1 ? b.y : b.z;
         if (!value) continue;
-        const int dof = 2 * (node0 + local) + k;
+        const int dof = D * (node0 + local) + k;
         const auto [it, fresh] = prescribed_by.emplace(dof, b.where);
         if (!fresh)
           throw InputError(c.file + ": " + b.where + ": node " + std::to_string(local) + " direction " +
-                           (k == 0 ? "x" : "y") + " is already prescribed by " + it->second);
+                           ("xyz"[k] + std::string()) + " is already prescribed by " + it->second);
         s.prescribed.push_back({dof, b.kind, *value, b.ramp});
       }
     }
@@ -398,18 +527,19 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   // equally, one NodalLoad per loaded DOF.
   for (const LoadSpec& l : c.loads) {
     const int bi = body_index(c, l.body, l.where, "body");
-    const int node0 = p.model.bodies[bi].first_node;
-    const std::vector<int>& nodes = node_set(c, p.meshes[bi], l.nodes, l.where, "nodes");
+    const int node0 = model.bodies[bi].first_node;
+    const std::vector<int>& nodes = node_set(c, meshes[bi], l.nodes, l.where, "nodes");
+    const Vec3 force = c.turned(l.force);
     double total = 0.0;
-    for (int local : nodes) total += l.by_mass ? p.model.mass[2 * (node0 + local)] : 1.0;
+    for (int local : nodes) total += l.by_mass ? model.mass[D * (node0 + local)] : 1.0;
     for (int local : nodes) {
-      const double share = (l.by_mass ? p.model.mass[2 * (node0 + local)] : 1.0) / total;
-      for (int k = 0; k < 2; ++k)
-        if (l.force[k] != 0.0) s.loads.push_back({2 * (node0 + local) + k, l.force[k] * share, l.start, l.ramp});
+      const double share = (l.by_mass ? model.mass[D * (node0 + local)] : 1.0) / total;
+      for (int k = 0; k < D; ++k)
+        if (force[k] != 0.0) s.loads.push_back({D * (node0 + local) + k, force[k] * share, l.start, l.ramp});
     }
   }
 
-  for (const ObstacleSpec& o : c.obstacles) s.obstacles.push_back(o.shape);
+  for (const ObstacleSpec& o : c.obstacles) obstacles_in(s, model).push_back(turned(c, shape_of(o, model)));
   s.friction.assign(c.bodies.size(), std::vector<double>(c.obstacles.size(), 0.0));
   for (std::size_t b = 0; b < c.bodies.size(); ++b)
     for (std::size_t o = 0; o < c.obstacles.size(); ++o) {
@@ -421,19 +551,19 @@ PreparedCase prepare_case(const CaseSpec& spec) {
     s.body_pairs.push_back({slave, master, cp.friction, cp.name});
     if (cp.two_pass) s.body_pairs.push_back({master, slave, cp.friction, cp.name});
   }
-  check_initial_penetration(c, p.model, s);
+  check_initial_penetration(c, model, s);
   s.contact = c.contact;
   s.penalty = c.penalty;
   s.contact_method = c.scheme == Scheme::explicit_penalty ? RunSettings::ContactMethod::penalty
                                                     : RunSettings::ContactMethod::bipotential;
   // The soft constraint's springs k1 = soft_scale m / (2 dt^2) use the step the run would have
   // without them: the elements' automatic step, or the fixed time.dt (LS-DYNA: the initial step).
-  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto() ? stable_time_step(p.model, c.dt_safety) : *c.dt;
+  if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto() ? c.dt_safety * model.critical_dt : *c.dt;
   // The automatic step: safety x the solver's critical step, which with penalty contact is the
   // combined limit of elements and springs (min(dt_e, dt_p) alone is not stable when the two
   // are close: tests/test_penalty_contact.cpp).
   // It also gives the springs' own limit, which the summary reports for fixed steps too.
-  const double critical = critical_time_step(p.model, s, &p.penalty_critical_dt);
+  const double critical = critical_time_step(model, s, &p.penalty_critical_dt);
   s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;
   // [relaxation]: the explicit schemes relax at half the run's step, the implicit scheme with
   // the semi-explicit loop at half the automatic explicit step (safety x the elements' critical
@@ -441,7 +571,7 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   s.relaxation.enabled = c.relaxation.enabled;
   s.relaxation.tolerance = c.relaxation.tolerance;
   s.relaxation.max_steps = c.relaxation.max_steps;
-  s.relaxation.dt = kRelaxationStepFactor * (c.scheme == Scheme::implicit ? c.dt_safety * p.model.critical_dt : s.dt);
+  s.relaxation.dt = kRelaxationStepFactor * (c.scheme == Scheme::implicit ? c.dt_safety * model.critical_dt : s.dt);
   // The variable step (explicit schemes, time.dt = "auto"): the same rule on the current
   // configuration every dt_update_interval steps (StepControl, solver/schemes/time_step.hpp).
   s.dt_update_interval = c.dt_update_interval;
@@ -450,29 +580,45 @@ PreparedCase prepare_case(const CaseSpec& spec) {
 
   for (const ProbeSpec& pr : c.probes) {
     const int bi = body_index(c, pr.body, pr.where, "body");
-    const Mesh& m = p.meshes[bi];
-    ProbeInfo info{pr.name, pr.body, 0, Vec2::Zero(), 0.0};
+    const auto& m = meshes[bi];
+    ProbeInfo info{pr.name, pr.body, 0, Vec3::Zero(), 0.0};
     int local = 0;
     if (pr.point) {
       double best = 1e300;
       for (int i = 0; i < m.num_nodes(); ++i) {
-        const double d = (m.nodes.col(i) - *pr.point).norm();
+        const double d = (m.nodes.col(i) - c.turned(*pr.point).template head<D>()).norm();
         if (d < best) best = d, local = i;
       }
       info.distance = best;
     } else {
       local = node_set(c, m, pr.node_set, pr.where, "node_set").front();
     }
-    info.node = p.model.bodies[bi].first_node + local;
-    info.position = m.nodes.col(local);
+    info.node = model.bodies[bi].first_node + local;
+    info.position.template head<D>() = m.nodes.col(local);
     p.probes.push_back(info);
     s.probes.push_back({pr.name, info.node});
+  }
+}
+
+}  // namespace
+
+PreparedCase prepare_case(const CaseSpec& spec) {
+  PreparedCase p;
+  p.spec = spec;
+  check_mesh_plan(p.spec);  // before a mesh is built: the generated meshes' memory
+  if (p.spec.dimension == 3) {
+    build_bodies(p, p.model3);
+    prepare_run(p, p.model3);
+  } else {
+    build_bodies(p, p.model);
+    prepare_run(p, p.model);
   }
   check_run_plan(p);  // steps, history rows, memory, the automatic step against time.end
   return p;
 }
 
 RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
+  if (pc.dimension() == 3) return run_explicit(pc.model3, pc.settings, progress);  // the reader allows no implicit 3D case
   if (pc.spec.scheme == Scheme::implicit) return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
   return run_explicit(pc.model, pc.settings, progress);
 }

@@ -14,9 +14,11 @@
 #include <toml++/toml.h>
 
 #include "harness/input/mesh_generators.hpp"
+#include "harness/input/mesh_generators3.hpp"
 #include "harness/outputs/vtu_writer.hpp"
 #include "solver/schemes/implicit.hpp"
 #include "solver/model/model.hpp"
+#include "solver/model/model3.hpp"
 
 namespace ricochet {
 
@@ -38,15 +40,25 @@ struct GmshFile {
   std::filesystem::path path;  // resolved against the case file's folder
 };
 
+// `extrude = {thickness, layers}` of a mesh table: a 2D mesh through z in [0, thickness].
+struct ExtrusionSpec {
+  double thickness = 0.0;  // [m]
+  int layers = 1;
+};
+
 struct MeshSpec {
   std::string name;
-  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile> source;
-  double distort = 0.0;          // generated meshes: interior nodes moved by up to this x h [-]
+  // BoxSpec: the 3D `generator = "box"`; a GmshFile holds 2D or 3D cells (`dimension`).
+  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile, BoxSpec> source;
+  std::optional<ExtrusionSpec> extrude;  // a 2D source made 3D
+  int dimension = 2;             // of the mesh this builds: 3 for a box, an extrusion or a 3D Gmsh file
+  double distort = 0.0;          // generated 2D meshes: interior nodes moved by up to this x h [-]
   std::uint64_t seed = 1;        // of the distortion's random numbers (distort_mesh)
   double scale = 1.0;            // coordinates multiplied by this [-]
-  double rotate = 0.0;           // then rotated counterclockwise by this [degrees]
-  Vec2 rotate_about = Vec2::Zero();  // about this point (of the scaled mesh) [m]
-  Vec2 offset = Vec2::Zero();    // then translated by this [m]
+  double rotate = 0.0;           // then rotated counterclockwise (about rotate_axis in 3D) by this [degrees]
+  Vec3 rotate_axis = Vec3::UnitZ();  // 3D: the rotation's axis (normalized on read)
+  Vec3 rotate_about = Vec3::Zero();  // about this point (of the scaled mesh) [m]; z = 0 in 2D
+  Vec3 offset = Vec3::Zero();    // then translated by this [m]; z = 0 in 2D
   std::string where;             // key path for error messages, e.g. "meshes.M1"
 };
 
@@ -61,19 +73,22 @@ struct MaterialSpec {
 
 struct BoxNodeSet {
   std::string name;
-  Eigen::Vector4d box;  // xmin, ymin, xmax, ymax in reference coordinates [m]
+  Vec3 lo, hi;  // (xmin, ymin, zmin), (xmax, ymax, zmax) in reference coordinates [m]; 2D: z 0
 };
 
 struct BodySpec {
   std::string name;
   std::string mesh;  // key of CaseSpec::meshes
-  std::string element = "q4";  // "q4" (2x2 Gauss) or "q4_hourglass" (1 point + FB)
+  // 2D: "q4" (2x2 Gauss) or "q4_hourglass" (1 point + FB); 3D: "hex8" (2x2x2 Gauss) or
+  // "hex8_hourglass" (1 point + FB). Triangles and tetrahedra have one formulation.
+  std::string element = "q4";
   HourglassControl hourglass;
   MaterialSpec material;
-  double thickness = 1.0;             // [m]
-  Vec2 velocity = Vec2::Zero();       // [m/s]
-  double angular_velocity = 0.0;      // about rotation_center, counterclockwise [rad/s]
-  std::optional<Vec2> rotation_center;  // [m]; default: the body's centre of mass
+  double thickness = 1.0;             // [m] (2D)
+  Vec3 velocity = Vec3::Zero();       // [m/s]; z = 0 in 2D
+  // About rotation_center [rad/s]: 2D the counterclockwise rate (in z), 3D the vector omega.
+  Vec3 angular_velocity = Vec3::Zero();
+  std::optional<Vec3> rotation_center;  // [m]; default: the body's centre of mass
   std::vector<BoxNodeSet> node_sets;
   std::string where;
 };
@@ -82,7 +97,7 @@ struct BoundarySpec {
   std::string body;
   std::string nodes;  // node set of that body
   PrescribedDof::Kind kind = PrescribedDof::Kind::velocity;
-  std::optional<double> x, y;  // [m/s] or [m]; absent = that direction is free
+  std::optional<double> x, y, z;  // [m/s] or [m]; absent = that direction is free (z: 3D)
   double ramp = 0.0;           // [s]
   std::string where;
 };
@@ -91,7 +106,7 @@ struct BoundarySpec {
 struct InitialVelocitySpec {
   std::string body;
   std::string nodes;  // node set of that body
-  Vec2 velocity = Vec2::Zero();  // [m/s]
+  Vec3 velocity = Vec3::Zero();  // [m/s]; z = 0 in 2D
   std::string where;
 };
 
@@ -99,7 +114,7 @@ struct InitialVelocitySpec {
 struct LoadSpec {
   std::string body;
   std::string nodes;             // node set of that body
-  Vec2 force = Vec2::Zero();     // total over the set [N]
+  Vec3 force = Vec3::Zero();     // total over the set [N]; z = 0 in 2D
   bool by_mass = true;           // shared by lumped mass (true) or equally (false)
   double start = 0.0;            // [s]
   double ramp = 0.0;             // [s]
@@ -116,7 +131,7 @@ struct RelaxationSpec {
 struct ProbeSpec {
   std::string name;
   std::string body;
-  std::optional<Vec2> point;  // nearest node to this reference point [m]
+  std::optional<Vec3> point;  // nearest node to this reference point [m]; z = 0 in 2D
   std::string node_set;       // or the first node of this set
   std::string where;
 };
@@ -125,7 +140,8 @@ struct ObstacleSpec {
   std::string name;
   Vec2 point = Vec2::Zero();    // [m]
   Vec2 normal = Vec2::UnitY();  // normalized on read
-  Obstacle shape;               // the checked geometry of any type (line: same point, normal)
+  Obstacle shape;               // 2D: the checked geometry of any type (line: same point, normal)
+  Obstacle3 shape3;             // 3D: the checked geometry (plane, sphere, box, cylinder)
   double friction = 0.0;        // mu for every body [-]
   std::map<std::string, double> friction_by_body;  // per-body mu [-]
   std::string where;
@@ -157,8 +173,16 @@ struct CaseSpec {
   std::vector<std::string> overrides;  // the --set arguments, in order
 
   Scheme scheme = Scheme::plain_explicit;
-  PlaneMode plane = PlaneMode::stress;
-  Vec2 gravity = Vec2::Zero();  // [m/s^2]
+  // 2 or 3: that of the meshes (every mesh of a case has the same; docs/case-format.md, 3D cases).
+  int dimension = 2;
+  PlaneMode plane = PlaneMode::stress;  // 2D
+  Vec3 gravity = Vec3::Zero();  // [m/s^2]; z = 0 in 2D
+  // [scene_rotation] (3D): every position and direction of the case turned by this rotation
+  // (meshes after their own transforms, velocities, gravity, loads, obstacles, probe points);
+  // node-set boxes select nodes before it. Empty: none. A frame-invariance check in a key.
+  std::optional<Mat3> scene_rotation;
+  // R v with the scene rotation, v itself without one.
+  Vec3 turned(const Vec3& v) const { return scene_rotation ? Vec3(*scene_rotation * v) : v; }
 
   std::map<std::string, MeshSpec> meshes;
   std::string default_mesh;  // top-level `mesh`

@@ -223,6 +223,12 @@ class Reader {
 
   Mesh build_planar() const;
   Mesh3 build_solid() const;
+  // Whether an element of the file is a volume cell (a tetrahedron or hexahedron).
+  bool has_volume_cells() const {
+    for (const RawElement& e : elements_)
+      if (dim_of_type(e.type) == 3) return true;
+    return false;
+  }
 
  private:
   void read_format() {
@@ -612,6 +618,16 @@ Mesh parse_gmsh(std::string text, const std::string& name) {
   Reader reader(Lexer(name, std::move(text)), kPlanar);
   reader.read();
   return reader.build_planar();
+}
+
+int gmsh_dimension(const std::filesystem::path& file) {
+  try {
+    Reader reader(Lexer(file.string(), read_text(file)), kSolid);
+    reader.read();
+    return reader.has_volume_cells() ? 3 : 2;
+  } catch (const InputError&) {
+    return 0;
+  }
 }
 
 Mesh3 read_gmsh3(const std::filesystem::path& file) { return parse_gmsh3(read_text(file), file.string()); }

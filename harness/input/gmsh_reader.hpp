@@ -40,4 +40,9 @@ Mesh3 read_gmsh3(const std::filesystem::path& file);
 // The same for the TEXT of a .msh file; `name` stands for the file in messages.
 Mesh3 parse_gmsh3(std::string text, const std::string& name);
 
+// The dimension of the cells of a .msh file, for a case to know its dimension before it builds
+// the mesh: 3 if it has tetrahedra or hexahedra (types 4, 5), else 2; 0 if it cannot be read or
+// parsed (the mesh's reader, read_gmsh or read_gmsh3, then reports why).
+int gmsh_dimension(const std::filesystem::path& file);
+
 }  // namespace ricochet

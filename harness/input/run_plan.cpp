@@ -34,21 +34,24 @@ std::string over_memory(const CaseSpec& c, double bytes) {
 // gap, status; per cell von Mises, Cauchy stress and Green-Lagrange strain (6 each).
 double snapshot_bytes(double nodes, double cells) { return 8.0 * (7.0 * nodes + 13.0 * cells); }
 
-// The history's columns: the summed ones, five per contact interface, four per probe
+// The history's columns: the summed ones, five per contact interface, four per probe (2D; six in 3D)
 // (history_columns(), solver/observers/run_monitor.hpp).
 double history_columns(const CaseSpec& c) {
-  return 24.0 + 5.0 * static_cast<double>(c.obstacles.size() + c.contact_pairs.size()) +
-         4.0 * static_cast<double>(c.probes.size());
+  const double d = c.dimension;  // 3D: momentum_z and three angular momentum columns, 6 per probe
+  return 24.0 + 3.0 * (d - 2.0) + 5.0 * static_cast<double>(c.obstacles.size() + c.contact_pairs.size()) +
+         2.0 * d * static_cast<double>(c.probes.size());
 }
 
 std::string where_of_body_cell(const PreparedCase& pc, int cell) {
-  for (std::size_t b = 0; b < pc.model.bodies.size(); ++b) {
-    const BodyInfo& info = pc.model.bodies[b];
-    if (cell >= info.first_cell && cell < info.first_cell + info.num_cells)
-      return "cell " + std::to_string(cell - info.first_cell) + " of " + pc.spec.bodies[b].where + " (\"" + info.name +
-             "\")";
-  }
-  return "cell " + std::to_string(cell);
+  return with_model(pc, [&](const auto& model) {
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      const auto& info = model.bodies[b];
+      if (cell >= info.first_cell && cell < info.first_cell + info.num_cells)
+        return "cell " + std::to_string(cell - info.first_cell) + " of " + pc.spec.bodies[b].where + " (\"" +
+               info.name + "\")";
+    }
+    return "cell " + std::to_string(cell);
+  });
 }
 
 }  // namespace
@@ -80,7 +83,7 @@ double model_bytes(double nodes, double cells) {
   return 1024.0 * cells + 512.0 * nodes + 64.0 * 1024.0 * 1024.0;
 }
 
-double generated_nodes(const MeshSpec& m) {
+double generated_nodes2(const MeshSpec& m) {
   if (const auto* r = std::get_if<RectangleSpec>(&m.source)) return (r->nx + 1.0) * (r->ny + 1.0);
   if (const auto* a = std::get_if<ArcPlateSpec>(&m.source)) return (a->nx + 1.0) * (a->ny + 1.0);
   if (const auto* d = std::get_if<DiskSpec>(&m.source)) {
@@ -90,7 +93,7 @@ double generated_nodes(const MeshSpec& m) {
   return -1.0;
 }
 
-double generated_cells(const MeshSpec& m) {
+double generated_cells2(const MeshSpec& m) {
   if (const auto* r = std::get_if<RectangleSpec>(&m.source)) return (r->triangles ? 2.0 : 1.0) * r->nx * double(r->ny);
   if (const auto* a = std::get_if<ArcPlateSpec>(&m.source)) return static_cast<double>(a->nx) * a->ny;
   if (const auto* d = std::get_if<DiskSpec>(&m.source)) {
@@ -98,6 +101,28 @@ double generated_cells(const MeshSpec& m) {
     return n * n + 4.0 * n * nr;
   }
   return -1.0;
+}
+
+// 3D: the box's nodes and cells (6 tetrahedra a cell with cells = "tet"), or an extrusion's: the
+// 2D mesh's nodes at layers + 1 levels, its cells times the layers (3 tetrahedra a triangle's
+// prism). -1 for a mesh file.
+double generated_nodes(const MeshSpec& m) {
+  if (const auto* b = std::get_if<BoxSpec>(&m.source)) return (b->nx + 1.0) * (b->ny + 1.0) * (b->nz + 1.0);
+  const double n2 = generated_nodes2(m);
+  if (m.extrude && n2 >= 0.0) return n2 * (m.extrude->layers + 1.0);
+  return n2;
+}
+
+double generated_cells(const MeshSpec& m) {
+  if (const auto* b = std::get_if<BoxSpec>(&m.source)) return (b->tetrahedra ? 6.0 : 1.0) * b->nx * double(b->ny) * b->nz;
+  const double e2 = generated_cells2(m);
+  if (m.extrude && e2 >= 0.0) {
+    const auto* r = std::get_if<RectangleSpec>(&m.source);
+    const auto* a = std::get_if<ArcPlateSpec>(&m.source);
+    const bool tris = (r && r->triangles) || (a && a->triangles);
+    return e2 * m.extrude->layers * (tris ? 3.0 : 1.0);
+  }
+  return e2;
 }
 
 void check_mesh_plan(const CaseSpec& c) {
@@ -116,7 +141,7 @@ void check_mesh_plan(const CaseSpec& c) {
   const double bytes = model_bytes(nodes, cells);
   if (bytes > c.limits.max_memory_gib * kGiB)
     throw InputError(c.file + ": " + largest + ": the generated meshes have " + num(cells) + " cells and " + num(nodes) +
-                     " nodes, " + over_memory(c, bytes) + "; use fewer cells (nx, ny, n) or raise limits.max_memory");
+                     " nodes, " + over_memory(c, bytes) + "; use fewer cells (nx, ny, nz, n, extrude.layers) or raise limits.max_memory");
 }
 
 double planned_history_rows(double steps, double dt, double interval) {
@@ -128,7 +153,7 @@ void check_run_plan(const PreparedCase& pc) {
   const CaseSpec& c = pc.spec;
   const RunSettings& s = pc.settings;
   const double dt = s.dt;
-  const int cell = pc.model.critical_cell;
+  const int cell = with_model(pc, [](const auto& m) { return m.critical_cell; });
   const std::string by = cell >= 0 ? ", set by " + where_of_body_cell(pc, cell) : "";
   const std::string dt_text =
       pc.dt_auto() ? "time.dt = \"auto\" (" + num(dt) + " s" + by + ")" : "time.dt = " + num(dt) + " s";
@@ -153,7 +178,8 @@ void check_run_plan(const PreparedCase& pc) {
     throw InputError(c.file + ": output.interval = " + num(s.sample_interval) + " s over time.end = " + num(c.end_time) +
                      " s at " + dt_text + " gives " + num(rows) + " history rows, more than limits.max_history_rows = " +
                      num(c.limits.max_history_rows) + "; a longer output.interval, or raise limits.max_history_rows");
-  const double nodes = pc.model.num_nodes(), cells = pc.model.num_cells();
+  const double nodes = with_model(pc, [](const auto& m) { return m.num_nodes(); });
+  const double cells = with_model(pc, [](const auto& m) { return m.num_cells(); });
   double snapshots = 1.0;  // a diverged run's last state
   for (double t : s.field_times)
     if (t <= c.end_time * (1.0 + 1e-9)) snapshots += 1.0;

@@ -257,6 +257,32 @@ std::vector<double> TableReader::numbers(std::string_view key, Range each) const
   return out;
 }
 
+Vec3 TableReader::vec(std::string_view key, int dim) const {
+  if (dim == 2) {
+    const Vec2 v = vec2(key);
+    return Vec3(v.x(), v.y(), 0.0);
+  }
+  const toml::node& n = require(key);
+  const toml::array* a = n.as_array();
+  const char* expected = "expected an array of three numbers [x, y, z]";
+  if (!a || a->size() != 3) fail(key, std::string(expected) + "; got " + show(n));
+  Vec3 v;
+  for (int d = 0; d < 3; ++d) {
+    const toml::node& e = (*a)[static_cast<std::size_t>(d)];
+    if (!e.is_number()) fail(key, std::string(expected) + "; got an element that is " + type_name(e));
+    const std::optional<double> x = exact_number(e);
+    if (!x) fail(key, std::string(expected) + "; " + beyond_double(e));
+    v[d] = *x;
+  }
+  if (!v.allFinite()) fail(key, "expected finite numbers");
+  return v;
+}
+
+Vec3 TableReader::vec(std::string_view key, int dim, Vec3 fallback) const {
+  read_.insert(std::string(key));
+  return has(key) ? vec(key, dim) : fallback;
+}
+
 Vec2 TableReader::point(std::string_view key, const toml::array& a) const {
   Vec2 v;
   for (int d = 0; d < 2; ++d) {

@@ -69,6 +69,10 @@ class TableReader {
                      const std::vector<std::string>& allowed) const;
   Vec2 vec2(std::string_view key, Vec2 fallback) const;
   Vec2 vec2(std::string_view key) const;
+  // A vector of `dim` = 2 ([x, y], z = 0; vec2's checks and messages) or 3 ([x, y, z]) finite
+  // numbers.
+  Vec3 vec(std::string_view key, int dim) const;
+  Vec3 vec(std::string_view key, int dim, Vec3 fallback) const;
   std::vector<double> numbers(std::string_view key, Range each) const;  // empty if absent
   // A point [x, y] of two finite numbers given as the array `a` found under `key` (e.g. an
   // element of a list of points); errors name `key`.

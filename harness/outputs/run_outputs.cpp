@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -16,6 +17,20 @@ namespace ricochet {
 namespace {
 
 const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
+
+// The arrays of a snapshot (docs/outputs.md, fields/*.vtu), 2D (VtuData) or 3D (VtuData3):
+// the nodes' vectors u, v and contact force, and the per-cell values in the file's cell order.
+template <class Data, class Map>
+void set_arrays(Data& d, const FieldSnapshot& f, const Map& u, const Map& v, const Map& force, std::vector<double> vm,
+                std::vector<double> cauchy, std::vector<double> green_lagrange, std::vector<int> body_id) {
+  using Vectors = typename Map::PlainObject;
+  d.point_vectors = {{"displacement", Vectors(u)}, {"velocity", Vectors(v)}, {"contact_force", Vectors(force)}};
+  d.point_scalars = {{"contact_gap", f.contact_gap}};
+  d.point_ints = {{"contact_status", f.contact_status}};
+  d.cell_scalars = {{"von_mises", std::move(vm)}};
+  d.cell_tensors = {{"cauchy_stress", std::move(cauchy)}, {"green_lagrange_strain", std::move(green_lagrange)}};
+  d.cell_ints = {{"body", std::move(body_id)}};
+}
 
 std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
   const Model& m = pc.model;
@@ -64,14 +79,58 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
       f.cauchy.size() != 6 * static_cast<std::size_t>(m.num_cells()) || f.green_lagrange.size() != f.cauchy.size())
     throw std::logic_error("field snapshot of step " + std::to_string(f.step) + " lacks its tensors or contact data");
   const Eigen::Map<const Eigen::Matrix2Xd> force(f.contact_force.data(), 2, m.num_nodes());
-  d.point_vectors = {{"displacement", Eigen::Matrix2Xd(u)},
-                     {"velocity", Eigen::Matrix2Xd(v)},
-                     {"contact_force", Eigen::Matrix2Xd(force)}};
-  d.point_scalars = {{"contact_gap", f.contact_gap}};
-  d.point_ints = {{"contact_status", f.contact_status}};
-  d.cell_scalars = {{"von_mises", vm}};
-  d.cell_tensors = {{"cauchy_stress", cauchy}, {"green_lagrange_strain", green_lagrange}};
-  d.cell_ints = {{"body", body_id}};
+  set_arrays(d, f, u, v, force, std::move(vm), std::move(cauchy), std::move(green_lagrange), std::move(body_id));
+  return format_vtu(d, pc.spec.field_format);
+}
+
+// 3D: the hexahedra and tetrahedra of every body in global cell order (per body its hexahedra,
+// then its tetrahedra, as the model numbers them and VtuData3 writes them: VTU's order is the
+// cells', hexes then tets per body, so the per-cell values need no reordering).
+std::string format_vtu_snapshot3(const PreparedCase& pc, const FieldSnapshot& f) {
+  const Model3& m = pc.model3;
+  const int n = m.num_nodes();
+  if (f.contact_force.size() != 3 * static_cast<std::size_t>(n) ||
+      f.cauchy.size() != 6 * static_cast<std::size_t>(m.num_cells()) || f.green_lagrange.size() != f.cauchy.size())
+    throw std::logic_error("field snapshot of step " + std::to_string(f.step) + " lacks its tensors or contact data");
+  VtuData3 d;
+  d.time = f.time;
+  const Eigen::Map<const Eigen::Matrix3Xd> u(f.u.data(), 3, n), v(f.v.data(), 3, n), force(f.contact_force.data(), 3, n);
+  d.points = m.ref + u;
+  // VtuData3 writes all hexahedra, then all tetrahedra: with several bodies the cells' values
+  // are put in that order.
+  std::vector<int> order;  // global cell of each VTU cell
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t b = 0; b < pc.meshes3.size(); ++b) {
+      const int n0 = m.bodies[b].first_node, c0 = m.bodies[b].first_cell;
+      const Mesh3& mesh = pc.meshes3[b];
+      const int nh = static_cast<int>(mesh.hexes.size());
+      if (pass == 0) {
+        for (int k = 0; k < nh; ++k) {
+          auto h = mesh.hexes[k];
+          for (int& i : h) i += n0;
+          d.hexes.push_back(h);
+          order.push_back(c0 + k);
+        }
+      } else {
+        for (int k = 0; k < static_cast<int>(mesh.tets.size()); ++k) {
+          auto t = mesh.tets[k];
+          for (int& i : t) i += n0;
+          d.tets.push_back(t);
+          order.push_back(c0 + nh + k);
+        }
+      }
+    }
+  std::vector<double> vm, cauchy, green_lagrange;
+  std::vector<int> body_id;
+  for (int c : order) {
+    vm.push_back(f.von_mises[c]);
+    cauchy.insert(cauchy.end(), f.cauchy.begin() + 6 * c, f.cauchy.begin() + 6 * c + 6);
+    green_lagrange.insert(green_lagrange.end(), f.green_lagrange.begin() + 6 * c, f.green_lagrange.begin() + 6 * c + 6);
+    int b = 0;
+    while (b + 1 < static_cast<int>(m.bodies.size()) && m.bodies[b + 1].first_cell <= c) ++b;
+    body_id.push_back(b);
+  }
+  set_arrays(d, f, u, v, force, std::move(vm), std::move(cauchy), std::move(green_lagrange), std::move(body_id));
   return format_vtu(d, pc.spec.field_format);
 }
 
@@ -119,19 +178,22 @@ Json case_identity(const PreparedCase& pc) {
 Json run_summary(const PreparedCase& pc, const RunResult& r) {
   const CaseSpec& c = pc.spec;
   Json j = case_identity(pc);
-  j["plane"] = plane_name(c.plane);
+  j["dimension"] = c.dimension;
+  j["plane"] = c.dimension == 2 ? Json(plane_name(c.plane)) : Json();
   // The friction coefficient of the first body-obstacle pair (null without obstacles).
   if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
     j["friction_coeff"] = nullptr;
   else
     j["friction_coeff"] = pc.settings.friction.front().front();
-  j["obstacles"] = static_cast<long>(pc.settings.obstacles.size());
+  j["obstacles"] = static_cast<long>(c.obstacles.size());
   j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
-  const bool any_contact = !pc.settings.obstacles.empty() || !pc.settings.body_pairs.empty();
+  const bool any_contact = !c.obstacles.empty() || !pc.settings.body_pairs.empty();
   j["contact_level"] = !any_contact || pc.spec.scheme == Scheme::explicit_penalty ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
-  j["nodes"] = pc.model.num_nodes();
-  j["elements"] = pc.model.num_cells();
+  with_model(pc, [&](const auto& m) {
+    j["nodes"] = m.num_nodes();
+    j["elements"] = m.num_cells();
+  });
   j["dt"] = r.dt;
   j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
   j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();
@@ -142,7 +204,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["dt_max"] = r.dt_max;
   j["dt_updates"] = r.dt_updates;
   j["dt_floor"] = r.dt_update_interval > 0 ? Json(r.dt_floor) : Json();
-  j["critical_dt"] = pc.model.critical_dt;
+  j["critical_dt"] = with_model(pc, [](const auto& m) { return m.critical_dt; });
   j["penalty_critical_dt"] = pc.penalty_critical_dt > 0.0 ? Json(pc.penalty_critical_dt) : Json();
   j["end_time"] = c.end_time;
   j["time_reached"] = r.end_time;
@@ -210,11 +272,13 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   drift["until"] = r.rest_until;
   drift["body"] = Json();
   drift["node"] = Json();
-  for (const BodyInfo& b : pc.model.bodies)
-    if (r.drift_node >= b.first_node && r.drift_node < b.first_node + b.num_nodes) {
-      drift["body"] = b.name;
-      drift["node"] = r.drift_node - b.first_node;
-    }
+  with_model(pc, [&](const auto& m) {
+    for (const auto& b : m.bodies)
+      if (r.drift_node >= b.first_node && r.drift_node < b.first_node + b.num_nodes) {
+        drift["body"] = b.name;
+        drift["node"] = r.drift_node - b.first_node;
+      }
+  });
   j["drift"] = drift;
   j["friction_dissipation"] = r.friction_dissipation;
   j["contact_work"] = r.contact_work;
@@ -222,10 +286,11 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   auto where = [&](const StressPeak& p) {
     if (p.cell < 0) return Json();
     Json w = Json::object();
-    w["body"] = pc.model.bodies[p.body].name;
+    w["body"] = with_model(pc, [&](const auto& m) { return m.bodies[p.body].name; });
     w["element"] = p.element;
     w["x"] = p.x;
     w["y"] = p.y;
+    if (c.dimension == 3) w["z"] = p.z;
     return w;
   };
   auto by_measure = [](const VonMises2& maxima) {
@@ -249,6 +314,16 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["contact_start_time"] = touched ? Json(r.contact_first_time) : Json();
   j["contact_end_time"] = touched ? Json(r.contact_last_time) : Json();
   j["contact_duration"] = touched ? Json(r.contact_last_time - r.contact_first_time) : Json();
+  // The mean normal contact force while in contact, the normal impulse over the time with an
+  // active contact [N], and the largest summed normal force of the history samples [N].
+  const double contact_time =
+      r.dt_update_interval > 0 ? r.contact_time : static_cast<double>(r.contact_steps) * r.dt;
+  j["contact_force_mean"] = contact_time > 0.0 ? Json(r.contact_impulse_normal / contact_time) : Json();
+  double force_max = 0.0;
+  if (r.history.rows() > 0)
+    for (std::size_t i = 0, col = r.history.column("normal_force"); i < r.history.rows(); ++i)
+      force_max = std::max(force_max, r.history.at(i, col));
+  j["contact_force_max"] = force_max;
   Json ci = Json::object();
   ci["mean"] = r.contact_sweeps_mean;
   ci["max"] = r.contact_sweeps_max;
@@ -267,15 +342,22 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   if (h.rows() > 0) {
     Json fin = Json::object();
     const std::size_t last = h.rows() - 1;
-    for (const char* k : {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
-                          "external_work", "friction_dissipation", "contact_work", "total_energy",
-                          "energy_error", "momentum_x", "momentum_y", "angular_momentum", "contact_work_normal"})
-      fin[k] = h.at(last, h.column(k));
+    std::vector<const char*> keys = {"time", "kinetic_energy", "strain_energy", "hourglass_energy",
+                                     "external_work", "friction_dissipation", "contact_work", "total_energy",
+                                     "energy_error", "momentum_x", "momentum_y"};
+    if (c.dimension == 2)
+      keys.push_back("angular_momentum");
+    else
+      keys.insert(keys.end(), {"momentum_z", "angular_momentum_x", "angular_momentum_y", "angular_momentum_z"});
+    keys.push_back("contact_work_normal");
+    for (const char* k : keys) fin[k] = h.at(last, h.column(k));
     j["final"] = fin;
     // Rebound velocity: the final linear momentum over the total mass [m/s].
     const bool massive = r.total_mass > 0.0;
     j["rebound_velocity_x"] = massive ? Json(h.at(last, h.column("momentum_x")) / r.total_mass) : Json();
     j["rebound_velocity_y"] = massive ? Json(h.at(last, h.column("momentum_y")) / r.total_mass) : Json();
+    if (c.dimension == 3)
+      j["rebound_velocity_z"] = massive ? Json(h.at(last, h.column("momentum_z")) / r.total_mass) : Json();
   }
   Json probes = Json::array();
   for (const auto& p : pc.probes) {
@@ -285,6 +367,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     q["node"] = p.node;
     q["x"] = p.position.x();
     q["y"] = p.position.y();
+    if (c.dimension == 3) q["z"] = p.position.z();
     q["distance"] = p.distance;
     probes.push_back(q);
   }
@@ -349,7 +432,8 @@ void write_run_outputs(const std::filesystem::path& dir, const PreparedCase& pc,
         char name[64];
         std::snprintf(name, sizeof name, "_%08ld.vtu", f.step);
         const std::string file = pc.spec.name + name;
-        write_file_atomic(stage / "fields" / file, format_vtu_snapshot(pc, f));
+        write_file_atomic(stage / "fields" / file,
+                          pc.dimension() == 3 ? format_vtu_snapshot3(pc, f) : format_vtu_snapshot(pc, f));
         series.emplace_back(f.time, file);
       }
       write_file_atomic(stage / "fields" / "fields.pvd", format_pvd(series));
@@ -380,7 +464,7 @@ std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const s
                 "%s: %s  t=%.4g s  %ld steps of %.4g s  %d cells  %.3g s wall  %.3g element-steps/s"
                 "  energy_error_max=%.3g  penetration_max=%.3g m  von_mises_max=%.4g Pa",
                 pc.spec.name.c_str(), r.status == RunStatus::ok ? "ok" : "DIVERGED", r.end_time,
-                r.steps, r.dt, pc.model.num_cells(), r.wall_seconds, r.element_steps_per_second,
+                r.steps, r.dt, with_model(pc, [](const auto& m) { return m.num_cells(); }), r.wall_seconds, r.element_steps_per_second,
                 r.energy_error_max, r.penetration_max, r.von_mises_max);
   std::string s = buf;
   if (r.dt_update_interval > 0) {

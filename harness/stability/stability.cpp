@@ -65,8 +65,9 @@ void check_stability_options(const StabilityOptions& o) {
 }
 
 double stability_estimate(const PreparedCase& pc) {
-  if (!uses_penalty_estimate(pc)) return pc.model.critical_dt;
-  return critical_time_step(pc.model, pc.settings);
+  return with_model(pc, [&](const auto& m) {
+    return uses_penalty_estimate(pc) ? critical_time_step(m, pc.settings) : m.critical_dt;
+  });
 }
 
 PreparedCase stability_trial_case(const PreparedCase& pc, double dt, const StabilityOptions& opt) {
@@ -132,7 +133,7 @@ StabilityResult find_stable_dt(const PreparedCase& pc, const StabilityOptions& o
                                const StabilityTrialFn& on_trial) {
   check_stability_options(opt);
   StabilityResult res;
-  res.critical_dt = pc.model.critical_dt;
+  res.critical_dt = with_model(pc, [](const auto& m) { return m.critical_dt; });
   res.penalty_critical_dt = uses_penalty_estimate(pc) ? pc.penalty_critical_dt : 0.0;
   res.estimate = stability_estimate(pc);
   res.end_time = opt.end_time.value_or(pc.settings.end_time);
@@ -198,8 +199,10 @@ StabilityResult find_stable_dt(const PreparedCase& pc, const StabilityOptions& o
 
 Json stability_report(const PreparedCase& pc, const StabilityOptions& opt, const StabilityResult& r) {
   Json j = case_identity(pc);
-  j["nodes"] = pc.model.num_nodes();
-  j["elements"] = pc.model.num_cells();
+  with_model(pc, [&](const auto& m) {
+    j["nodes"] = m.num_nodes();
+    j["elements"] = m.num_cells();
+  });
   j["critical_dt"] = r.critical_dt;
   j["penalty_critical_dt"] = r.penalty_critical_dt > 0.0 ? Json(r.penalty_critical_dt) : Json();
   j["estimate"] = r.estimate;

@@ -31,10 +31,10 @@ def strip_comments(text):
 
 
 def coarse(text):
-    """The case with every generated mesh at most 4 cells across (nx, ny, n): the readers' logic
+    """The case with every generated mesh at most 4 cells across (nx, ny, nz, n): the readers' logic
     is the same, and an input that builds a mesh of 400 or 50000 cells slows the fuzzer down
     100 to 10000 times (the sweeps' finest meshes take seconds under the sanitizers)."""
-    return re.sub(r"^(\s*(?:nx|ny|n)\s*=\s*)(\d+)", lambda m: m.group(1) + str(min(int(m.group(2)), 4)),
+    return re.sub(r"^(\s*(?:nx|ny|nz|n)\s*=\s*)(\d+)", lambda m: m.group(1) + str(min(int(m.group(2)), 4)),
                   text, flags=re.M)
 
 
