@@ -6,7 +6,9 @@
 // - element_forces3_stress_all/..., _stress_bound/...: with the per-step Cauchy von Mises
 //   tracking, every point ranked (threshold 0) or every point skipped by the bound;
 // - element_forces3_scaling/<element>/svk/<n>: cubes of n = 10, 22, 46, 100 a side (1e3, 1.06e4,
-//   9.7e4, 1e6 cells).
+//   9.7e4, 1e6 cells);
+// - explicit_step3/<element>/svk/<n>[/threads:2]: a whole explicit step on those cubes (tet4:
+//   6 n^3 cells), one and two threads.
 // Reported: time per call, and element_steps_per_second = cells processed per second
 // [cells/s] (items_per_second counts the same cells).
 #include <cmath>
@@ -19,6 +21,8 @@
 #include "bench/bench_common.hpp"
 #include "harness/input/mesh_generators3.hpp"
 #include "solver/elements/internal_forces3.hpp"
+#include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/threads.hpp"
 
 namespace ricochet::bench {
 namespace {
@@ -115,6 +119,39 @@ void element_forces3(benchmark::State& state, Element3 element, MaterialKind mat
   state.counters["cells"] = model.num_cells();
 }
 
+// A full explicit step of the 3D model without energies: evaluate() (the threaded force pass,
+// accelerations) then update(), on the cube vibrating from the small smooth field above
+// (dt = 0.5 x model.critical_dt), one thread, or two for the names ending in /threads:2 (wall
+// time): the 3D rows of the scaling table of docs/performance.md.
+void explicit_step3(benchmark::State& state, Element3 element, int n, int threads) {
+  const ThreadScope scope(threads);
+  const Model3& model = cube_model(element, MaterialKind::st_venant_kirchhoff, n);
+  const std::vector<PrescribedDof> prescribed;
+  State s = initial_state(model, prescribed, 0.5 * model.critical_dt, cube_field(model, n, 1e-5));
+  s.v_half = cube_field(model, n, 1.0);
+  evaluate(model, prescribed, s, /*with_energy=*/false);
+  update(s);
+  const State start = s;
+  long since_reset = 0;
+  for (auto _ : state) {
+    if (since_reset == 1000) {  // stay in the small-strain regime however long the run
+      state.PauseTiming();
+      s = start;
+      since_reset = 0;
+      state.ResumeTiming();
+    }
+    evaluate(model, prescribed, s, /*with_energy=*/false);
+    update(s);
+    ++since_reset;
+    benchmark::DoNotOptimize(s.u.data());
+    benchmark::ClobberMemory();
+  }
+  if (!s.u.allFinite() || !(s.forces.min_jacobian > 0.9)) fail(state, "state left the small-strain regime");
+  state.SetItemsProcessed(state.iterations() * model.num_cells());
+  state.counters["element_steps_per_second"] =
+      benchmark::Counter(model.num_cells(), benchmark::Counter::kIsIterationInvariantRate);
+}
+
 const bool registered = [] {
   constexpr int n = 20;
   for (const Element3 e : {Element3::hex8_2x2x2, Element3::hex8_one_point_viscous, Element3::hex8_one_point_stiffness,
@@ -134,6 +171,15 @@ const bool registered = [] {
                                    StressMode::off)
           ->Unit(benchmark::kMillisecond);
     }
+  for (const Element3 e : {Element3::hex8_2x2x2, Element3::hex8_one_point_viscous, Element3::tet4})
+    for (const int side : {10, 22, 46, 100})
+      for (const int threads : {1, 2}) {
+        const std::string name = "explicit_step3/" + std::string(element3_name(e)) + "/svk/" + std::to_string(side) +
+                                 (threads > 1 ? "/threads:2" : "");
+        auto* b = benchmark::RegisterBenchmark(name.c_str(), explicit_step3, e, side, threads)
+                      ->Unit(benchmark::kMillisecond);
+        if (threads > 1) b->UseRealTime();
+      }
   return true;
 }();
 

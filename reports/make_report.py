@@ -27,6 +27,10 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            stable step / estimate per parameter and scheme, the points where the automatic step
            is not stable, the remedy runs: report_stability.py). Without it, DIR itself when it
            is such a sweep (stability searches with `stable_over_estimate`).
+--three-d, --three-d-refinement, --three-d-fields  the 3D sweep cases/three_d/sweep.toml, its
+           refinement sweep cases/three_d/refinement.toml and a run of
+           cases/three_d/oblique_block.toml with fields (the 3D part: report_three_d.py). Without
+           --three-d, DIR itself when its runs are the 3D cases.
 --long-runs a finished sweep of cases/long_runs/sweep.toml with the drift.csv of
            reports/long_runs.py (energy residual per scene and scheme, the drift table). Without
            it, DIR itself when it holds a drift.csv.
@@ -36,7 +40,9 @@ For the paper's sweep, without --accuracy / --stability / --verification / --kim
 --kim-kwak-fields / --envelope / --long-runs, the script looks for DIR/../accuracy,
 DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification, DIR/verification,
 DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove, DIR/rubber_groove, DIR/../envelope,
-DIR/envelope, DIR/../long_runs and DIR/long_runs (unless --no-discover); a source that is missing
+DIR/envelope, DIR/../long_runs, DIR/long_runs, DIR/../three_d, DIR/three_d,
+DIR/../three_d_refinement, DIR/three_d_refinement, DIR/../oblique_block and DIR/oblique_block
+(unless --no-discover); a source that is missing
 gives a "not available" section saying how to produce it, never a crash. For any other sweep
 only DIR/stability is looked for, and parts without data are left out.
 
@@ -66,6 +72,7 @@ import report_figures as F  # noqa: E402
 import report_generic as RG  # noqa: E402
 import report_kim_kwak as RK  # noqa: E402
 import report_stability as RS  # noqa: E402
+import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
                        fmt_dt, fmt_g, git_commit, read_reference, read_stability, same,
@@ -830,6 +837,7 @@ PAPER_SECTIONS = [
     ("penetration", sec_penetration),
     ("verification", lambda c: RV.sections(c, Section)),   # one section per verification case
     ("kim_kwak", lambda c: RK.sections(c, Section)),       # shapes, histories, runs table
+    ("three_d", lambda c: R3.sections(c, Section)),        # 3D shapes, bar, oblique block, frame
     ("failed", sec_failed),
     ("runs", sec_runs),
     ("histories", sec_histories),
@@ -847,6 +855,7 @@ SWEEP_SECTIONS = [
     ("verification", lambda c: RV.sections(c, Section) if c.get("ver") else []),
     ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")
      else []),
+    ("three_d", lambda c: R3.sections(c, Section) if c.get("td") or c.get("td_fields") else []),
     ("histories", sec_histories),
 ]
 
@@ -999,6 +1008,9 @@ def render(ctx, sections):
            "kim_kwak_fields": ctx.get("kk_fields"),
            "envelope": ctx["env"][0].dir if ctx.get("env") else None,
            "long_runs": ctx["long"].dir if ctx.get("long") else None,
+           "three_d": ctx["td"].dir if ctx.get("td") else None,
+           "three_d_refinement": ctx["td_ref"].dir if ctx.get("td_ref") else None,
+           "three_d_fields": ctx.get("td_fields"),
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
@@ -1036,10 +1048,26 @@ def discover(main_dir, args):
     fields = args.kim_kwak_fields
     if fields is None and not args.no_discover:
         fields = next((c for c in places("rubber_groove") if RK.find_fields(c)), None)
+    td_fields = args.three_d_fields
+    if td_fields is None and not args.no_discover:
+        td_fields = next((c for c in places("oblique_block") if RK.find_fields(c)), None)
+    three_d = (sweep_folder(args.three_d, "three_d"),
+               sweep_folder(args.three_d_refinement, "three_d_refinement"),
+               os.path.abspath(td_fields) if td_fields else None)
     return (sweep_folder(args.accuracy, "accuracy"), stab,
             sweep_folder(args.verification, "verification"), sweep_folder(args.kim_kwak, "kim_kwak"),
             os.path.abspath(fields) if fields else None,
-            sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"))
+            sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"), three_d)
+
+
+def td_meta(td, err, ref, ref_err):
+    if td is None:
+        return ("not available" + (f" ({err})" if err else "") + f": run `{R3.SWEEP_CMD}`")
+    gates = RK.gates_result(td.dir)[0]
+    return (f"`{td.dir}` ({len(td.runs)} runs; " + (f"gates {gates}" if gates else "no gates-junit.xml")
+            + "); refinement " + (f"`{ref.dir}` ({len(ref.runs)} runs)" if ref is not None else
+                                  "not available" + (f" ({ref_err})" if ref_err else "")
+                                  + f": run `{R3.REF_CMD}`"))
 
 
 def kk_meta(kk, err):
@@ -1113,7 +1141,12 @@ def generic_sources(main_sweep, args):
     long_dir = args.long_runs
     if long_dir is None and os.path.isfile(os.path.join(main_sweep.dir, "drift.csv")):
         long_dir = main_sweep.dir
-    return args.accuracy, stab, ver, kk, fields, env, long_dir
+    td = args.three_d
+    if td is None and "bar_wall3" in cases and "oblique_block" in cases:
+        td = main_sweep.dir
+    three_d = (td, args.three_d_refinement,
+               os.path.abspath(args.three_d_fields) if args.three_d_fields else None)
+    return args.accuracy, stab, ver, kk, fields, env, long_dir, three_d
 
 
 def main(argv=None):
@@ -1133,6 +1166,12 @@ def main(argv=None):
     ap.add_argument("--long-runs", metavar="LONG_DIR",
                     help="long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv "
                          "(reports/long_runs.py)")
+    ap.add_argument("--three-d", metavar="TD_DIR",
+                    help="3D sweep folder (cases/three_d/sweep.toml)")
+    ap.add_argument("--three-d-refinement", metavar="TDR_DIR",
+                    help="3D refinement sweep folder (cases/three_d/refinement.toml)")
+    ap.add_argument("--three-d-fields", metavar="FIELDS_DIR",
+                    help="run folder of cases/three_d/oblique_block.toml with fields/*.vtu")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
@@ -1159,11 +1198,12 @@ def main(argv=None):
               file=sys.stderr)
         return 1
     if paper:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir = \
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d = \
             discover(args.dir, args)
     else:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir = \
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d = \
             generic_sources(main_sweep, args)
+    td_dir, td_ref_dir, td_fields = three_d
     same_dir = lambda d: d is not None and os.path.abspath(d) == main_sweep.dir  # noqa: E731
     acc, acc_err = read_sweep(acc_dir, "accuracy") if acc_dir else (None, None)
     ver, ver_err = ((main_sweep, None) if same_dir(ver_dir) else
@@ -1172,6 +1212,9 @@ def main(argv=None):
                   read_sweep(kk_dir, "kim_kwak") if kk_dir else (None, None))
     long_sw, long_err = ((main_sweep, None) if same_dir(long_dir) else
                          read_sweep(long_dir, "long_runs") if long_dir else (None, None))
+    td, td_err = ((main_sweep, None) if same_dir(td_dir) else
+                  read_sweep(td_dir, "three_d") if td_dir else (None, None))
+    td_ref, td_ref_err = read_sweep(td_ref_dir, "three_d_refinement") if td_ref_dir else (None, None)
     env, env_err = None, None     # env: (Sweep, [EnvPoint]) of the envelope sweep
     if env_dir:
         sw_env, got = RS.read_envelope(env_dir)
@@ -1188,7 +1231,8 @@ def main(argv=None):
            "now": now, "ver": ver, "ver_err": ver_err, "kk": kk, "kk_err": kk_err,
            "kk_fields": kk_fields, "paper": paper, "title": title,
            "max_run_plots": args.max_run_plots, "env": env, "env_err": env_err,
-           "long": long_sw, "long_err": long_err}
+           "long": long_sw, "long_err": long_err, "td": td, "td_err": td_err, "td_ref": td_ref,
+           "td_ref_err": td_ref_err, "td_fields": td_fields}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -1226,6 +1270,9 @@ def main(argv=None):
                                    f"not available: run `{STAB_CMD}` {STAB_MORE}")),
             ("Stability-envelope sweep", env_meta(env, env_err)),
             ("Long-run sweep", long_meta(long_sw, long_err)),
+            ("3D sweeps", td_meta(td, td_err, td_ref, td_ref_err)),
+            ("3D fields run", f"`{show_path(td_fields)}`" if td_fields else
+             f"not available: run `{R3.FIELDS_CMD}`"),
         ] + common_tail + [
             ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & "
                                 "Magnain, C. R. Mécanique 338 (2010) 176–180)"),

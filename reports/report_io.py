@@ -356,8 +356,8 @@ def _parse_vtu(path):
 def read_vtu(path):
     """A VTK XML UnstructuredGrid as written by ricochet (docs/outputs.md), in any of its
     field formats: {time, points (n,2) deformed, displacement (n,2), cells [list of index
-    arrays], cell_data {name: array}, point_data {name: array}}; arrays of several components
-    are (tuples, components)."""
+    arrays], cell_data {name: array}, point_data {name: array}}, and for a 3D file (tetrahedra,
+    hexahedra) points3 (n,3) deformed; arrays of several components are (tuples, components)."""
     root, appended = _parse_vtu(path)
     dec = _VtuDecoder(root, appended)
     out = {"time": math.nan, "cell_data": {}, "point_data": {}}
@@ -382,6 +382,9 @@ def read_vtu(path):
     offs = dec.values(cells["offsets"]).astype(int)
     starts = np.concatenate([[0], offs[:-1]])
     out["cells"] = [conn[a:b] for a, b in zip(starts, offs)]
+    # 3D files (VTK_TETRA 10, VTK_HEXAHEDRON 12): the full coordinates too.
+    if "types" in cells and np.isin(dec.values(cells["types"]).astype(int), (10, 12)).any():
+        out["points3"] = pts
     disp = out["point_data"].get("displacement")
     out["displacement"] = disp[:, :2] if disp is not None else np.zeros_like(out["points"])
     return out

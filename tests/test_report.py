@@ -73,6 +73,7 @@ VER_BASE = os.path.join(REPO, "cases", "verification", "bar_wall.toml")
 PY = sys.executable or "/usr/bin/python3"
 sys.path.insert(0, os.path.join(REPO, "reports"))
 import report_kim_kwak as RK  # noqa: E402
+import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402  (the case specs: which sections to expect)
 
 BINARY = None
@@ -159,6 +160,10 @@ KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
 KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
 KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
 KK_IDS = ("kk_shapes", "kk_histories", "kk_interfaces", "kk_runs")
+TD_IDS = ("td_shapes", "td_bar", "td_oblique", "td_frame")
+TD_SWEEP = os.path.join(REPO, "cases", "three_d", "sweep.toml")
+TD_GATES = os.path.join(REPO, "ci", "gates", "three_d.toml")
+TD_CASE = os.path.join(REPO, "cases", "three_d", "oblique_block.toml")
 ENV_IDS = ("envelope", "envelope_unsafe")           # report_stability.py: the envelope sweep
 LONG_IDS = ("long_runs", "long_runs_table")         # and the long-run sweep with drift.csv
 LONG_RUNS_PY = os.path.join(REPO, "reports", "long_runs.py")
@@ -485,6 +490,14 @@ class ReportSmoke(unittest.TestCase):
         kk_cmd = [BINARY, "sweep", KK_SWEEP, "--out", cls.kk, "--check", KK_GATES, "--quiet"]
         kk = subprocess.Popen(kk_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         run([BINARY, "run", KK_CASE, "--out", cls.kk_fields, "--quiet"])
+        # the 3D sweep next to the paper sweep (discovered), the oblique block with its fields
+        # given with --three-d-fields
+        cls.td = os.path.join(t, "sweeps", "three_d")
+        cls.td_fields = os.path.join(t, "other", "oblique_block")
+        run([BINARY, "sweep", TD_SWEEP, "--out", cls.td, "--check", TD_GATES, "--quiet",
+             "--jobs", "2"], ok=(0, 4))
+        run([BINARY, "run", TD_CASE, "--out", cls.td_fields, "--quiet", "--set",
+             "obstacles[0].friction=0.1", "--set", "output.fields=[0.0, 1e-3, 3e-3]"])
         run([BINARY, "sweep", os.path.join(t, "paper.toml"), "--out", cls.paper, "--jobs", "2",
              "--quiet"])
         run([BINARY, "sweep", os.path.join(t, "accuracy.toml"), "--out", cls.acc, "--jobs", "2",
@@ -520,7 +533,7 @@ class ReportSmoke(unittest.TestCase):
         cls.out_full = os.path.join(t, "full_report")
         run([BINARY, "report", cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
              "--verification", cls.ver, "--kim-kwak-fields", cls.kk_fields,
-             "--long-runs", cls.long, "--out", cls.out_full])
+             "--long-runs", cls.long, "--three-d-fields", cls.td_fields, "--out", cls.out_full])
 
     @classmethod
     def tearDownClass(cls):
@@ -558,7 +571,7 @@ class ReportSmoke(unittest.TestCase):
     def test_bare_report_says_what_is_missing(self):
         man, page = self.check_files(self.out_bare)
         by_id = {s["id"]: s for s in man["sections"]}
-        missing = ("work_precision", "stability", "verification") + KK_IDS + ENV_IDS + LONG_IDS
+        missing = ("work_precision", "stability", "verification") + KK_IDS + ENV_IDS + LONG_IDS + TD_IDS
         for sid in missing:
             self.assertFalse(by_id[sid]["available"], sid)
             sec = section_html(page, sid)
@@ -574,6 +587,9 @@ class ReportSmoke(unittest.TestCase):
         for sid in ENV_IDS:
             self.assertIn("cases/envelope/envelope.toml", section_html(page, sid))
             self.assertIn("--envelope", section_html(page, sid))
+        self.assertIn("cases/three_d/oblique_block.toml", section_html(page, "td_shapes"))
+        for sid in TD_IDS[1:]:
+            self.assertIn("cases/three_d/sweep.toml", section_html(page, sid))
         for sid in LONG_IDS:
             self.assertIn("cases/long_runs/sweep.toml", section_html(page, sid))
             self.assertIn("reports/long_runs.py", section_html(page, sid))
@@ -609,7 +625,7 @@ class ReportSmoke(unittest.TestCase):
         expected = {"table1", "fig1", "fig2", "fig3", "fig4", "fig5", "fig6", "fig7",
                     "stability", "penetration", "failed", "runs", "histories",
                     "scheme_limits"} | wp_ids \
-            | ver_ids | set(KK_IDS) | set(ENV_IDS) | set(LONG_IDS)
+            | ver_ids | set(KK_IDS) | set(ENV_IDS) | set(LONG_IDS) | set(TD_IDS)
         by_id = {s["id"]: s for s in man["sections"]}
         self.assertEqual(set(by_id), expected)
         for sid, s in by_id.items():
@@ -636,7 +652,8 @@ class ReportSmoke(unittest.TestCase):
                           ("kk_shapes", "kim_kwak_shapes"),
                           ("kk_histories", "kim_kwak_histories"),
                           ("kk_interfaces", "kim_kwak_interfaces"),
-                          ("long_runs", "long_runs_residual")):
+                          ("long_runs", "long_runs_residual"),
+                          ("td_shapes", "three_d_shapes"), ("td_bar", "three_d_bar")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -666,6 +683,53 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(sorted(by_id["fig2"]["runs"]),
                          ["table1/010-mesh=M2_time.dt=1e-6_scheme=semi_explicit",
                           "table1/011-mesh=M2_time.dt=1e-6_scheme=implicit"])
+
+    def test_three_d_part(self):
+        """The 3D part: the discovered 3D sweep, the given fields run; the bar table against the
+        1D solution and the 3D/2D ratios recomputed from summary.csv; frame invariance rows."""
+        man, page = self.check_files(self.out_full)
+        self.assertEqual(man["three_d"], os.path.abspath(self.td))
+        self.assertEqual(man["three_d_fields"], os.path.abspath(self.td_fields))
+        by_id = {s["id"]: s for s in man["sections"]}
+        for sid in TD_IDS:
+            self.assertEqual(by_id[sid]["part"], R3.PART_TITLE, sid)
+        with open(os.path.join(self.out_full, "index.html")) as f:
+            parser = Tables()
+            parser.feed(f.read())
+        tables = parser.tables
+        rows = {r["run_id"]: r for r in read_csv(os.path.join(self.td, "summary.csv"))}
+        bar = tables["tab-td_bar_table"]
+        bar_ids = sorted(i for i, r in rows.items() if r["case"] == "bar_wall3" and r["status"] == "ok")
+        self.assertEqual(len(bar_ids), 5)
+        self.assertEqual(sorted(r[0] for r in bar), bar_ids)
+        for r in bar:
+            f = float(rows[r[0]]["contact_force_mean"])
+            self.assertIn(f"({100 * (f / 16000.0 - 1):+.2f} %)", r[2], r[0])
+        self.assertEqual(sorted(by_id["td_bar"]["runs"]), bar_ids)
+        # 3D / 2D: every quantity of every scheme and mu, the ratio of the two runs' cells
+        ob = tables["tab-td_oblique"]
+        self.assertGreaterEqual(len(ob), 20)
+        col = {"rebound v_y (m/s)": "rebound_velocity_y", "contact time (s)":
+               "contact_iterations.contact_time", "von Mises peak (Pa)": "von_mises_max"}
+        checked = 0
+        for r in ob:
+            if r[1] not in col:
+                continue
+            scheme, mu = r[0].split(", ")
+            pick = lambda g: next(v for v in rows.values() if v["group"] == g and v["status"] == "ok"  # noqa: E731
+                                  and float(v["obstacles[0].friction"]) == float(mu)
+                                  and (v["summary.scheme"] == "semi_explicit") == scheme.startswith("semi"))
+            a, b = float(pick("oblique")[col[r[1]]]), float(pick("oblique2d")[col[r[1]]])
+            self.assertEqual(r[4], f"{a / b:.4f}", r)
+            checked += 1
+        self.assertEqual(checked, 12)  # 3 quantities x 2 schemes x 2 mu
+        frame = tables["tab-td_frame"]
+        self.assertEqual(len(frame), 10)
+        for r in frame:
+            self.assertLess(float(r[4]), 1e-9, r)
+        cap = section_html(page, "td_shapes")
+        self.assertIn("(0, 1, 3 ms; fields/*.vtu)", cap)
+        self.assertEqual(by_id["td_shapes"]["runs"], [os.path.abspath(self.td_fields)])
 
     def test_tables_have_expected_rows(self):
         with open(os.path.join(self.out_full, "index.html")) as f:
@@ -902,11 +966,15 @@ class ReportSmoke(unittest.TestCase):
         import argparse
         args = argparse.Namespace(accuracy=None, stability=None, verification=None,
                                   kim_kwak=None, kim_kwak_fields=None, envelope=None,
-                                  long_runs=None, no_discover=False)
+                                  long_runs=None, three_d=None, three_d_refinement=None,
+                                  three_d_fields=None, no_discover=False)
         src = make_report.generic_sources(Sweep(self.env), args)
-        self.assertEqual(src[5:], (os.path.abspath(self.env), None))
+        self.assertEqual(src[5:7], (os.path.abspath(self.env), None))
         src = make_report.generic_sources(Sweep(self.long), args)
-        self.assertEqual(src[5:], (None, os.path.abspath(self.long)))
+        self.assertEqual(src[5:7], (None, os.path.abspath(self.long)))
+        self.assertEqual(src[7], (None, None, None))  # no 3D sources for the long runs
+        src = make_report.generic_sources(Sweep(self.td), args)  # the 3D sweep is its own source
+        self.assertEqual(src[7], (self.td, None, None))
         rep = os.path.join(self.tmp, "alone_long")
         run([PY, SCRIPT, self.long, "--out", rep, "--max-run-plots", "1"])
         got = {s["id"]: s for s in self.manifest(rep)["sections"]}
