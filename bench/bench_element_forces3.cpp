@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bench/bench_common.hpp"
+#include "bench/explicit_steps.hpp"
 #include "harness/input/mesh_generators3.hpp"
 #include "solver/elements/internal_forces3.hpp"
 #include "solver/schemes/central_difference.hpp"
@@ -131,21 +132,7 @@ void explicit_step3(benchmark::State& state, Element3 element, int n, int thread
   s.v_half = cube_field(model, n, 1.0);
   evaluate(model, prescribed, s, /*with_energy=*/false);
   update(s);
-  const State start = s;
-  long since_reset = 0;
-  for (auto _ : state) {
-    if (since_reset == 1000) {  // stay in the small-strain regime however long the run
-      state.PauseTiming();
-      s = start;
-      since_reset = 0;
-      state.ResumeTiming();
-    }
-    evaluate(model, prescribed, s, /*with_energy=*/false);
-    update(s);
-    ++since_reset;
-    benchmark::DoNotOptimize(s.u.data());
-    benchmark::ClobberMemory();
-  }
+  s = time_explicit_steps(state, model, prescribed, State(s));
   if (!s.u.allFinite() || !(s.forces.min_jacobian > 0.9)) fail(state, "state left the small-strain regime");
   state.SetItemsProcessed(state.iterations() * model.num_cells());
   state.counters["element_steps_per_second"] =

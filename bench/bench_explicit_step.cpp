@@ -9,15 +9,12 @@
 #include <vector>
 
 #include "bench/bench_common.hpp"
+#include "bench/explicit_steps.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet::bench {
 namespace {
-
-// Steps between restores of the starting state (done with the timer paused), so a long run
-// never leaves the small-strain regime however many iterations the library picks.
-constexpr long reset_every = 1000;
 
 void explicit_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx, int threads) {
   const ThreadScope scope(threads);
@@ -32,21 +29,7 @@ void explicit_step(benchmark::State& state, ElementKind element, MaterialKind ma
   evaluate(model, prescribed, s, /*with_energy=*/false);
   update(s);
   const State start = s;
-
-  long since_reset = 0;
-  for (auto _ : state) {
-    if (since_reset == reset_every) {
-      state.PauseTiming();
-      s = start;
-      since_reset = 0;
-      state.ResumeTiming();
-    }
-    evaluate(model, prescribed, s, /*with_energy=*/false);
-    update(s);
-    ++since_reset;
-    benchmark::DoNotOptimize(s.u.data());
-    benchmark::ClobberMemory();
-  }
+  s = time_explicit_steps(state, model, prescribed, start);
 
   if (!s.u.allFinite() || !s.v_half.allFinite() || !(s.forces.min_jacobian > 0.9))
     fail(state, "state left the small-strain regime");

@@ -50,6 +50,25 @@ METRIC_TEXT = {
 MAX_RUN_PLOTS = 30   # default cap on the per-run history figures (--max-run-plots)
 
 
+def part_sections(ctx, Section, builders, part, intro):
+    """The sections of one part of the report: fn(ctx, Section, sid, title) for each
+    (sid, title, fn) of builders, each under the part's title and intro; a builder that raises
+    gives a section that shows the error (one broken section must not stop the others)."""
+    import traceback
+    out = []
+    for sid, title, fn in builders:
+        try:
+            s = fn(ctx, Section, sid, title)
+        except Exception as e:  # noqa: BLE001
+            traceback.print_exc()
+            s = Section(sid, title, "figure")
+            s.error = f"{type(e).__name__}: {e}"
+        s.part = part
+        s.part_intro = intro
+        out.append(s)
+    return out
+
+
 def metric_unit(col):
     """The unit of an error column, or None when the report does not know it."""
     if col in METRIC_UNITS:

@@ -14,12 +14,12 @@ A source that is missing gives "not available" sections with the command that pr
 import json
 import math
 import os
-import traceback
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
 import report_figures as F
+import report_generic as RG
 import report_verification as RV
 from report_io import (REPO, field_files, fmt_dt, fmt_g, read_case, read_vtu,
                        resolve_case_file, scheme_name)
@@ -305,18 +305,7 @@ def sections(ctx, Section):
                 ("kk_histories", "Energy error and ball velocity per run", sec_histories),
                 ("kk_interfaces", "Contact forces per interface", sec_interfaces),
                 ("kk_runs", "The Kim–Kwak-type runs", sec_runs))
-    out = []
-    for sid, title, fn in builders:
-        try:
-            s = fn(ctx, Section, sid, title)
-        except Exception as e:  # noqa: BLE001 - one broken section must not stop the others
-            traceback.print_exc()
-            s = Section(sid, title, "figure")
-            s.error = f"{type(e).__name__}: {e}"
-        s.part = PART_TITLE
-        s.part_intro = intro
-        out.append(s)
-    return out
+    return RG.part_sections(ctx, Section, builders, PART_TITLE, intro)
 
 
 def _no_sweep(ctx, s):

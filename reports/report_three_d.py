@@ -14,11 +14,12 @@ A source that is missing gives "not available" sections with the command that pr
 import json
 import math
 import os
-import traceback
 
 import numpy as np
 
 import report_figures as F
+import report_generic as RG
+import report_kim_kwak as RK
 from report_io import REPO, field_files, fmt_g, read_vtu, resolve_case_file, scheme_name
 
 SWEEP_CMD = ("build/ricochet sweep cases/three_d/sweep.toml --out results/three_d "
@@ -151,18 +152,7 @@ def sections(ctx, Section):
                 ("td_bar", "The bar on a rigid wall in 3D", sec_bar),
                 ("td_oblique", "The oblique block against the 2D plane-stress plate", sec_oblique),
                 ("td_frame", "Frame invariance: the turned scene", sec_frame))
-    out = []
-    for sid, title, fn in builders:
-        try:
-            s = fn(ctx, Section, sid, title)
-        except Exception as e:  # noqa: BLE001 - one broken section must not stop the others
-            traceback.print_exc()
-            s = Section(sid, title, "figure")
-            s.error = f"{type(e).__name__}: {e}"
-        s.part = PART_TITLE
-        s.part_intro = intro
-        out.append(s)
-    return out
+    return RG.part_sections(ctx, Section, builders, PART_TITLE, intro)
 
 
 def _no_sweep(ctx, s, key="td", cmd=SWEEP_CMD, name="three_d"):
@@ -174,11 +164,8 @@ def _no_sweep(ctx, s, key="td", cmd=SWEEP_CMD, name="three_d"):
 
 
 def _fields_frames(folder):
-    fdir = None
-    for d in (os.path.join(folder, "fields"), folder) if folder else ():
-        if os.path.isdir(d) and field_files(d):
-            fdir = d
-            break
+    """(the fields folder, [(time, vtu)] of at most MAX_PANELS field times) of a run folder."""
+    fdir = RK.find_fields(folder)
     if fdir is None:
         return None, []
     files = field_files(fdir)
