@@ -3,13 +3,15 @@
 diagrams per error metric, each run's history and the runs that failed; for the paper's sweep
 (cases/paper_table1.toml) also Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside
 the paper's numbers, with the accuracy sweep, the stability map, the stability envelope and the
-long runs (report_stability.py), penetration over time, the verification cases and the
-Kim–Kwak-type problem.
+long runs (report_stability.py), penetration over time, the verification cases, the
+Kim–Kwak-type problem and the 3D cases (report_three_d.py).
 
     /usr/bin/python3 reports/make_report.py DIR [--accuracy ACC_DIR] [--stability PATH ...]
                                                 [--verification VER_DIR] [--kim-kwak KK_DIR]
                                                 [--kim-kwak-fields FIELDS_DIR]
                                                 [--envelope ENV_DIR] [--long-runs LONG_DIR]
+                                                [--three-d TD_DIR] [--three-d-refinement TDR_DIR]
+                                                [--three-d-fields FIELDS_DIR]
                                                 [--out OUT] [--max-run-plots N] [--no-discover]
 
 DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
@@ -1177,7 +1179,8 @@ def main(argv=None):
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
     ap.add_argument("--no-discover", action="store_true",
                     help="do not look for accuracy/, stability/, verification/, kim_kwak/, "
-                         "rubber_groove/, envelope/ and long_runs/ next to DIR")
+                         "rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/ and "
+                         "oblique_block/ next to DIR")
     args = ap.parse_args(argv)
     if args.max_run_plots < 0:
         ap.error(f"--max-run-plots {args.max_run_plots}: must be 0 or more")

@@ -63,9 +63,12 @@ const std::vector<Script>& scripts() {
         {"--kim-kwak-fields", "FIELDS_DIR", "run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu"},
         {"--envelope", "ENV_DIR", "stability-envelope sweep folder (cases/envelope/envelope.toml)"},
         {"--long-runs", "LONG_DIR", "long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv"},
+        {"--three-d", "TD_DIR", "3D sweep folder (cases/three_d/sweep.toml)"},
+        {"--three-d-refinement", "TDR_DIR", "3D refinement sweep folder (cases/three_d/refinement.toml)"},
+        {"--three-d-fields", "FIELDS_DIR", "run folder of cases/three_d/oblique_block.toml with fields/*.vtu"},
         {"--out", "OUT", "report folder (default DIR/report)"},
         {"--max-run-plots", "N", "draw the histories of at most N runs (default 30)"},
-        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/ and long_runs/ next to DIR"},
+        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/ and oblique_block/ next to DIR"},
         {"-h, --help", "", "the script's help"}}},
       {"plot", "plot_run.py",
        "one PNG of a run's history (docs/report.md): RUN_DIR/history.png; runs reports/plot_run.py "
