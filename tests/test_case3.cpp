@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -172,6 +173,47 @@ end = 1e-4
   EXPECT_NE(error_of(two_d, {"bodies[0].velocity=[1.0, 0.0, 0.0]"}).find("two numbers [x, y]"), std::string::npos);
 }
 
+// The 3D set-up of the keys the 2D code had: a mesh turned about rotate_axis, a spin vector,
+// [[initial_velocity]], [[boundary]] with z, [[loads]] with a z force, gravity in z.
+TEST(Case3, ThreeDimensionalSetUp) {
+  // A quarter turn about x through the origin: (x, y, z) -> (x, -z, y); the box is lifted by
+  // 0.03 m so that it stays above the plane y = 0.
+  const PreparedCase turned =
+      prepare_case(read(kBlock, {"meshes.m.rotate=90.0", "meshes.m.rotate_axis=[2.0, 0.0, 0.0]",
+                                 "meshes.m.offset=[0.0, 0.03, 0.0]"}));
+  const PreparedCase plain = prepare_case(read(kBlock));
+  for (int i = 0; i < plain.model3.num_nodes(); ++i) {
+    const Vec3 x = plain.model3.ref.col(i);
+    EXPECT_LT((Vec3(turned.model3.ref.col(i)) - Vec3(x.x(), -x.z() + 0.03, x.y())).norm(), 1e-15) << i;
+  }
+  // v = velocity + omega x (x - c), c the centre of mass (here the box's centre).
+  const Vec3 w(10.0, -20.0, 30.0), c(0.01, 0.006, 0.005);
+  const PreparedCase spin = prepare_case(read(kBlock, {"bodies[0].angular_velocity=[10.0, -20.0, 30.0]"}));
+  for (int i = 0; i < spin.model3.num_nodes(); ++i) {
+    const Vec3 expected = Vec3(1.0, -2.0, 0.5) + w.cross(Vec3(spin.model3.ref.col(i)) - c);
+    EXPECT_LT((Vec3(spin.model3.initial_velocity.segment<3>(3 * i)) - expected).norm(), 1e-14) << i;
+  }
+  // Node sets of the box: left (x = 0, 9 nodes), back (z = 0, 15 nodes).
+  const PreparedCase set = prepare_case(
+      read(kBlock, {"initial_velocity=[{nodes = \"left\", velocity = [0.0, 0.0, 3.0]}]",
+                    "boundary=[{nodes = \"back\", z = 0.0}]",
+                    "loads=[{nodes = \"left\", force = [0.0, 0.0, 9.0], distribution = \"equal\"}]",
+                    "gravity=[0.0, 0.0, -9.81]"}));
+  const std::vector<int>& left = set.meshes3[0].node_sets.at("left");
+  const std::vector<int>& back = set.meshes3[0].node_sets.at("back");
+  ASSERT_EQ(left.size(), 9u);
+  ASSERT_EQ(back.size(), 15u);
+  for (int i : left) EXPECT_EQ(Vec3(set.model3.initial_velocity.segment<3>(3 * i)), Vec3(0.0, 0.0, 3.0));
+  ASSERT_EQ(set.settings.prescribed.size(), back.size());  // z only
+  for (std::size_t k = 0; k < back.size(); ++k) EXPECT_EQ(set.settings.prescribed[k].dof, 3 * back[k] + 2);
+  ASSERT_EQ(set.settings.loads.size(), left.size());  // z only, 1 N each
+  for (std::size_t k = 0; k < left.size(); ++k) {
+    EXPECT_EQ(set.settings.loads[k].dof, 3 * left[k] + 2);
+    EXPECT_DOUBLE_EQ(set.settings.loads[k].value, 1.0);
+  }
+  EXPECT_EQ(set.model3.gravity, Vec3(0.0, 0.0, -9.81));
+}
+
 // Every 3D obstacle type reads into the checked shape.
 TEST(Case3, ObstacleTypes) {
   const CaseSpec s = read(kBlock, {"obstacles=[{type = \"sphere\", center = [0.0, -1.0, 0.0], radius = 0.5}]"});
@@ -243,6 +285,25 @@ TEST(Case3, RunWritesThreeDimensionalOutputs) {
   EXPECT_GT(s["friction_dissipation"].get<double>(), 0.0);
   EXPECT_LE(s["penetration_max"].get<double>(), 1e-12);
   EXPECT_GT(s["contact_force_mean"].get<double>(), 0.0);
+  // contact_force_max is the largest normal_force of the history.
+  {
+    std::ifstream hist(out / "history.csv");
+    std::string line;
+    std::getline(hist, line);
+    std::vector<std::string> names;
+    std::stringstream hs(line);
+    for (std::string cell; std::getline(hs, cell, ',');) names.push_back(cell);
+    const auto col = std::find(names.begin(), names.end(), "normal_force") - names.begin();
+    double largest = 0.0;
+    while (std::getline(hist, line)) {
+      std::stringstream ls(line);
+      std::string cell;
+      for (long k = 0; k <= col; ++k) std::getline(ls, cell, ',');
+      largest = std::max(largest, std::stod(cell));
+    }
+    EXPECT_GT(largest, 0.0);
+    EXPECT_EQ(s["contact_force_max"].get<double>(), largest);
+  }
   // One field file: 45 points, 16 hexahedra (VTK type 12), the 3D arrays.
   std::vector<fs::path> vtu;
   for (const auto& e : fs::directory_iterator(out / "fields"))

@@ -260,7 +260,9 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
                 a.energy_error_max, worst, (q * pa - pb).norm(), pa.norm());
     EXPECT_LE((q * pa - pb).norm(), 1e-9 * pa.norm());
     EXPECT_NEAR(a.friction_dissipation, b.friction_dissipation, 1e-9 * a.friction_dissipation);
-    if (!penalty) EXPECT_LE(a.penetration_max, 1e-12);
+    if (!penalty) {
+      EXPECT_LE(a.penetration_max, 1e-12);
+    }
   }
 }
 

@@ -50,15 +50,13 @@ struct Space<2> {
   using Surface = ricochet::Surface;
   using Box = Box2;
 };
-// The master surface of a 3D body pair: its boundary faces (BodyInfo3::boundary_faces) and
-// their nodes. Contact between bodies in 3D (node to face) is not there yet: make_contact_set
-// rejects body pairs for a Model3, so no Surface3 is made; the type completes Space<3> for the
-// dimension-generic code (update_boxes, penetration).
+// The master surface of a 3D body pair. Contact between bodies in 3D (node to face) is not
+// there yet: make_contact_set rejects body pairs for a Model3, so no Surface3 is made; the type
+// completes Space<3> with the two members the dimension-generic code reads (update_boxes,
+// surface_box). Node-to-face contact will give it the master's faces.
 struct Surface3 {
-  int body = 0;
-  std::vector<BoundaryFace> faces;
-  std::vector<int> nodes;
-  double max_length = 0.0;  // [m]
+  std::vector<int> nodes;   // the boundary nodes (for the bounding box)
+  double max_length = 0.0;  // longest reference face edge [m]
 };
 template <>
 struct Space<3> {
