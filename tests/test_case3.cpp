@@ -127,7 +127,6 @@ TEST(Case3, TwoDKeysAndLimitsAreNamed) {
   };
   const std::vector<Bad> bad = {
       {{"plane=\"strain\""}, {"plane", "applies to 2D cases"}},
-      {{"scheme=\"implicit\""}, {"scheme", "2D only so far"}},
       {{"bodies[0].thickness=0.01"}, {"bodies[0].thickness", "applies to 2D bodies"}},
       {{"bodies[0].element=\"q4\""}, {"bodies[0].element", "hex8"}},
       {{"bodies[0].velocity=[1.0, 2.0]"}, {"bodies[0].velocity", "three numbers [x, y, z]"}},

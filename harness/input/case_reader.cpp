@@ -444,9 +444,6 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   } else {
     if (root.has("plane"))
       root.fail("plane", "applies to 2D cases (plane stress or strain); this case's meshes are 3D");
-    if (c.scheme == Scheme::implicit)
-      root.fail("scheme", "\"implicit\" is 2D only so far; allowed in a 3D case: \"explicit\", \"semi_explicit\", "
-                          "\"explicit_penalty\"");
   }
   c.gravity = root.vec("gravity", c.dimension, Vec3::Zero());
   // A mesh name that is not defined: say which are, and the likely one.

@@ -618,9 +618,10 @@ PreparedCase prepare_case(const CaseSpec& spec) {
 }
 
 RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
-  if (pc.dimension() == 3) return run_explicit(pc.model3, pc.settings, progress);  // the reader allows no implicit 3D case
-  if (pc.spec.scheme == Scheme::implicit) return run_implicit(pc.model, pc.settings, pc.spec.implicit, progress);
-  return run_explicit(pc.model, pc.settings, progress);
+  return with_model(pc, [&](const auto& model) {
+    return pc.spec.scheme == Scheme::implicit ? run_implicit(model, pc.settings, pc.spec.implicit, progress)
+                                              : run_explicit(model, pc.settings, progress);
+  });
 }
 
 }  // namespace ricochet

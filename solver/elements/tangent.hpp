@@ -3,25 +3,29 @@
 // element pass assembles the iteration matrix A = m_scale M + k_scale K_T + c_scale C into a sparse
 // matrix of fixed pattern and, in the same pass, the internal forces exactly as internal_forces
 // computes them.
-// DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver.
+// DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver; in 3D (x0, y0, z0, x1, ...)
+// (tangent3.cpp: the same two functions for a Model3).
 #pragma once
 
 #include <Eigen/SparseCore>
 #include <vector>
 
 #include "solver/elements/internal_forces.hpp"
+#include "solver/elements/internal_forces3.hpp"
 #include "solver/model/model.hpp"
+#include "solver/model/model3.hpp"
 
 namespace ricochet {
 
-// A sparse 2n x 2n symmetric matrix with the fixed pattern of the model's element couplings
-// (full storage, both triangles), built once; assembly only overwrites values.
-// Pattern: row 2a+i holds the columns 2b+k (k = 0, 1) of every node b that shares a cell with
-// node a, and always its own two columns (so the diagonal exists even for a node in no cell).
+// A sparse Dn x Dn symmetric matrix (D = 2 or 3 DOFs per node) with the fixed pattern of the
+// model's element couplings (full storage, both triangles), built once; assembly only overwrites
+// values. Pattern: row Da+i holds the columns Db+k (k < D) of every node b that shares a cell
+// with node a, and always its own D columns (so the diagonal exists even for a node in no cell).
 struct SystemMatrix {
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix;
-  // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model), the
-  // positions in matrix.valuePtr() of its (2N x 2N) entries, row-major over element dofs
+  // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model; in 3D
+  // hex8_hourglass, hex8_full, tet4 as in Model3), the positions in matrix.valuePtr() of its
+  // (DN x DN) entries, row-major over element dofs
   std::vector<int> slots;
   Eigen::VectorXd diagonal;  // copy of the diagonal after assembly (for Jacobi preconditioning)
   std::vector<int> diagonal_slots;  // position of entry (d, d) in matrix.valuePtr(), per DOF
@@ -37,6 +41,16 @@ SystemMatrix make_system_matrix(const Model& model);
 // returns the same ForceTotals (energies only when with_energy).
 // `s` must come from make_system_matrix(model). Performs no heap allocation.
 ForceTotals assemble_system(const Model& model, const double* u, const double* v, double m_scale,
+                            double k_scale, double c_scale, SystemMatrix& s, double* f_int,
+                            bool with_energy);
+
+// The same for a Model3 (tangent3.cpp): D = 3 DOFs per node, the pattern of the 3D cells, and
+// the element matrices of element3d.hpp (hex8_stiffness, hex8_one_point_stiffness,
+// tet4_stiffness) on the geometry rebuilt by cell_geometry() (model3.hpp). f_int and the totals
+// come from the 3D force pass, internal_forces(const Model3&, ...), so the Newton residual and
+// the assembly see the same forces bit for bit.
+SystemMatrix make_system_matrix(const Model3& model);
+ForceTotals assemble_system(const Model3& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);
 

@@ -16,7 +16,8 @@ namespace {
 // The round-off floor of the internal nodal forces [N]: a cell's stress carries an error of
 // about eps (lambda + 2 mu) from the cancellation in E = (F^T F - I)/2 near F = I, and its
 // nodal forces about that times its size and thickness; 16 such errors, of the stiffest cell.
-// (lambda + 2 mu) = rho c_p^2 and the cell size L_e = c_p cell_dt (model.hpp).
+// (lambda + 2 mu) = rho c_p^2 and the cell size L_e = c_p cell_dt (model.hpp). In 3D the
+// thickness is the cell size too: the error scales with the cell's face area L_e^2.
 double internal_force_roundoff(const Model& model) {
   double f = 0.0;
   for (const BodyInfo& b : model.bodies) {
@@ -27,24 +28,52 @@ double internal_force_roundoff(const Model& model) {
   }
   return f;
 }
+double internal_force_roundoff(const Model3& model) {
+  double f = 0.0;
+  for (const BodyInfo3& b : model.bodies) {
+    const double rho = material_density(b.material), c = material_wave_speed(b.material);
+    double size = 0.0;
+    for (int k = b.first_cell; k < b.first_cell + b.num_cells; ++k) size = std::max(size, c * model.cell_dt[k]);
+    f = std::max(f, 16.0 * std::numeric_limits<double>::epsilon() * rho * c * c * size * size);
+  }
+  return f;
+}
 
 }  // namespace
 namespace {
 
-bool same_stencil(const Stencil& a, const Stencil& b) {
+template <int N>
+bool same_stencil(const StencilN<N>& a, const StencilN<N>& b) {
   if (a.count != b.count) return false;
   for (int j = 0; j < a.count; ++j)
     if (a.node[j] != b.node[j] || a.coef[j] != b.coef[j]) return false;
   return true;
 }
 
+// Component d of a contact's local vector: 0 the normal, 1 (and 2 in 3D) the tangential ones,
+// in the order of its frame's directions (n, t) or (n, t1, t2).
+inline double component(const LocalPair& r, int d) { return d == 0 ? r.n : r.t; }
+inline double component(const LocalPair3d& r, int d) { return d == 0 ? r.n : r.t[d - 1]; }
+inline void set_component(LocalPair& r, int d, double x) { (d == 0 ? r.n : r.t) = x; }
+inline void set_component(LocalPair3d& r, int d, double x) { (d == 0 ? r.n : r.t[d - 1]) = x; }
+// Direction d of the frame of normal n: n, t (2D), or n, t1, t2 (3D).
+inline Vec2 frame_direction(const ContactFrame<2>& f, int d) { return d == 0 ? f.n : f.t; }
+inline Vec3 frame_direction(const ContactFrame<3>& f, int d) { return d == 0 ? f.n : d == 1 ? f.t1 : f.t2; }
+// The diagonal of A at a node, for the local compliance estimate: the mean over its DOFs.
+inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::integral_constant<int, 2>) {
+  return 0.5 / inv_diag[2 * node] + 0.5 / inv_diag[2 * node + 1];
+}
+inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::integral_constant<int, 3>) {
+  return (1.0 / inv_diag[3 * node] + 1.0 / inv_diag[3 * node + 1] + 1.0 / inv_diag[3 * node + 2]) / 3.0;
+}
+
 }  // namespace
 
-ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& run,
-                                       const ImplicitSettings& settings)
-    : model_(model), run_(run), set_(settings) {
+template <class M>
+ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& run, const ImplicitSettings& settings)
+    : model_(model), run_(run), obstacles_(obstacles_of(run, model)), set_(settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement, run.loads);
-  contact_ = make_contact_set(model, run.obstacles, run.friction, run.prescribed, run.body_pairs);
+  contact_ = make_contact_set(model, obstacles_, run.friction, run.prescribed, run.body_pairs);
   x_free_.assign(contact_.candidates.size(), {});
   weight_.assign(contact_.candidates.size(), 0.0);
   system_ = make_system_matrix(model);
@@ -67,11 +96,11 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
       (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
     }
   residuals_.reserve(set_.max_newton_iterations + 1);
-  const int directions = contact_.any_friction ? 2 : 1;
+  const int directions = contact_.any_friction ? D : 1;
   const int slots = directions * static_cast<int>(contact_.candidates.size());
   columns_.resize(n, slots);
   column_factor_.assign(slots, -1);
-  column_direction_.assign(slots, Vec2::Zero());
+  column_direction_.assign(slots, Vec::Zero());
   column_stencil_.assign(slots, Stencil{});
   active_columns_.reserve(slots);
   w_.resize(slots, slots);
@@ -87,14 +116,16 @@ ImplicitIntegrator::ImplicitIntegrator(const Model& model, const RunSettings& ru
 // 1, 4, 16, ... until it is positive definite: the iteration matrix changes, the converged
 // solution G = 0 does not (a damped Newton iteration). The contact problem needs W positive
 // definite.
-void ImplicitIntegrator::use_direct() {
+template <class M>
+void ImplicitIntegratorT<M>::use_direct() {
   direct_ = true;
   factor_.analyze(system_.matrix);
   a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
   refactor_next_ = true;
 }
 
-bool ImplicitIntegrator::factorize() {
+template <class M>
+bool ImplicitIntegratorT<M>::factorize() {
   const int n = model_.num_dofs();
   double* a = a_values_.data();
   std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
@@ -118,18 +149,21 @@ bool ImplicitIntegrator::factorize() {
 }
 
 // Prescribed DOFs: identity rows and columns, so their velocity increment is zero.
-void ImplicitIntegrator::constrain_matrix() {
+template <class M>
+void ImplicitIntegratorT<M>::constrain_matrix() {
   double* values = system_.matrix.valuePtr();
   for (int k : constrained_entries_) values[k] = 0.0;
   for (int k : constrained_diagonal_) values[k] = 1.0;
   for (int i = 0; i < model_.num_dofs(); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
 }
 
-double ImplicitIntegrator::load_average(const NodalLoad& l) const {
+template <class M>
+double ImplicitIntegratorT<M>::load_average(const NodalLoad& l) const {
   return (1.0 - set_.xi) * l.force_at(s_.time) + set_.xi * l.force_at(s_.time + s_.dt);
 }
 
-bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+template <class M>
+bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (direct_) {
     factor_.solve(b, x);
     return true;
@@ -152,7 +186,8 @@ bool ImplicitIntegrator::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   return true;
 }
 
-double ImplicitIntegrator::residual(bool with_energy) {
+template <class M>
+double ImplicitIntegratorT<M>::residual(bool with_energy) {
   const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
   s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
@@ -169,8 +204,8 @@ double ImplicitIntegrator::residual(bool with_energy) {
   // A body at rest has no momentum, and its internal forces balance gravity and the contact
   // reactions: then the floor is the internal forces' own round-off (internal_force_roundoff),
   // which the tolerance must not ask G to go below.
-  scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).lpNorm<Eigen::Infinity>(),
-                     model_.mass.cwiseProduct(v0_).lpNorm<Eigen::Infinity>(),
+  scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
+                     model_.mass.cwiseProduct(v0_).template lpNorm<Eigen::Infinity>(),
                      dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
                      dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(),
                      dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
@@ -178,21 +213,24 @@ double ImplicitIntegrator::residual(bool with_energy) {
   return g_.lpNorm<Eigen::Infinity>() / scale;
 }
 
-bool ImplicitIntegrator::solve_contact() {
+template <class M>
+bool ImplicitIntegratorT<M>::solve_contact() {
   const double dt = s_.dt, th = set_.theta;
   const bool position = run_.contact.level == ContactLevel::position;
   const double c = position ? dt * th : 1.0;  // x = x_free + c H y
-  ContactSet& cs = contact_;
+  ContactSetT<D>& cs = contact_;
   cs.active.clear();
-  auto u_pred = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) + dt * th * dv_free_.segment<2>(2 * j); };
-  auto x_pred = [&](int j) -> Vec2 { return model_.ref.col(j) + u_pred(j); };
+  auto u_pred = [&](int j) -> Vec {
+    return u1_.template segment<D>(D * j) + dt * th * dv_free_.template segment<D>(D * j);
+  };
+  auto x_pred = [&](int j) -> Vec { return model_.ref.col(j) + u_pred(j); };
   update_boxes(cs, x_pred);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
     // Gap and frame at the predicted position (see closest() in obstacle.hpp); the reactions of
     // this iterate act along this frame. Between bodies the segment is chosen from the start of
     // the step (u0, v0).
-    ObstacleContact oc;
-    if (!candidate_frame(model_, run_.obstacles, cs, k, u0_, v0_, x_pred, oc)) {
+    typename Space<D>::ObstacleContact oc;
+    if (!candidate_frame(model_, obstacles_, cs, k, u0_, v0_, x_pred, oc)) {
       cs.reaction[k] = {};
       continue;
     }
@@ -206,17 +244,17 @@ bool ImplicitIntegrator::solve_contact() {
       continue;
     }
     cs.normal[k] = oc.normal;
-    const Vec2 t = oc.tangent();
-    Vec2 du = Vec2::Zero(), v_rel = Vec2::Zero();
+    const ContactFrame<D> frame(oc.normal);
+    Vec du = Vec::Zero(), v_rel = Vec::Zero();
     double compliance = 0.0;  // sum_j coef_j^2 / a_jj: exact when A is diagonal
     for (int j = 0; j < st.count; ++j) {
       const int node = st.node[j];
-      du += st.coef[j] * (u_pred(node) - u0_.segment<2>(2 * node));
-      v_rel += st.coef[j] * (v1_.segment<2>(2 * node) + dv_free_.segment<2>(2 * node));
-      const double a_jj = 0.5 / inv_diag_[2 * node] + 0.5 / inv_diag_[2 * node + 1];
+      du += st.coef[j] * (u_pred(node) - u0_.template segment<D>(D * node));
+      v_rel += st.coef[j] * (v1_.template segment<D>(D * node) + dv_free_.template segment<D>(D * node));
+      const double a_jj = node_diagonal(inv_diag_, node, std::integral_constant<int, D>{});
       compliance += st.coef[j] * st.coef[j] / a_jj;
     }
-    x_free_[k] = position ? LocalPair{gap, t.dot(du)} : LocalPair{oc.normal.dot(v_rel), t.dot(v_rel)};
+    x_free_[k] = position ? Local{gap, frame.tangential(du)} : frame.local(v_rel);
     weight_[k] = c * dt * compliance;
     cs.active.push_back(k);
   }
@@ -237,14 +275,19 @@ bool ImplicitIntegrator::solve_contact() {
   return true;
 }
 
-bool ImplicitIntegrator::engage_penetrating() {
+template <class M>
+bool ImplicitIntegratorT<M>::engage_penetrating() {
   bool any = false;
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
     if (engaged_[k]) continue;
     const ContactCandidate& cc = contact_.candidates[k];
-    const Vec2 x = model_.ref.col(cc.node) + u1_.segment<2>(2 * cc.node);
-    const bool inside = cc.pair < 0 ? closest(run_.obstacles[cc.obstacle], x).gap < 0.0
-                                    : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
+    const Vec x = model_.ref.col(cc.node) + u1_.template segment<D>(D * cc.node);
+    bool inside;
+    if constexpr (D == 2)
+      inside = cc.pair < 0 ? closest(obstacles_[cc.obstacle], x).gap < 0.0
+                           : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
+    else
+      inside = cc.pair < 0 && closest(obstacles_[cc.obstacle], x).gap < 0.0;  // no body pairs in 3D yet
     if (inside) {
       engaged_[k] = 1;
       any = true;
@@ -254,32 +297,34 @@ bool ImplicitIntegrator::engage_penetrating() {
 }
 
 // The reactions of the active contacts as nodal forces (the stencil of each contact).
-void ImplicitIntegrator::build_impulse() {
+template <class M>
+void ImplicitIntegratorT<M>::build_impulse() {
   impulse_.setZero();
   for (int k : contact_.active) add_reaction(k);
 }
 
-void ImplicitIntegrator::add_reaction(int k) {
-  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
-  const Vec2 r = contact_.reaction[k].n * n + contact_.reaction[k].t * t;
+template <class M>
+void ImplicitIntegratorT<M>::add_reaction(int k) {
+  const Vec r = ContactFrame<D>(contact_.normal[k]).global(contact_.reaction[k]);
   const Stencil& st = contact_.stencil[k];
-  for (int j = 0; j < st.count; ++j) impulse_.segment<2>(2 * st.node[j]) += st.coef[j] * r;
+  for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
 }
 
 // (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
-LocalPair ImplicitIntegrator::stencil_dot(int k, const Eigen::VectorXd& y) const {
-  const Vec2 n = contact_.normal[k], t{n.y(), -n.x()};
+template <class M>
+typename ImplicitIntegratorT<M>::Local ImplicitIntegratorT<M>::stencil_dot(int k, const Eigen::VectorXd& y) const {
   const Stencil& st = contact_.stencil[k];
-  Vec2 sum = Vec2::Zero();
-  for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.segment<2>(2 * st.node[j]);
-  return {n.dot(sum), t.dot(sum)};
+  Vec sum = Vec::Zero();
+  for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.template segment<D>(D * st.node[j]);
+  return ContactFrame<D>(contact_.normal[k]).local(sum);
 }
 
 // Uzawa sweeps: x(R) exact through one solve of A per sweep, rho = omega / w with w the
 // diagonal estimate of the local compliance; omega halves whenever the largest reaction
 // change grows. Fast when A is mass-dominated (W nearly diagonal).
-bool ImplicitIntegrator::uzawa_contact(double c) {
-  ContactSet& cs = contact_;
+template <class M>
+bool ImplicitIntegratorT<M>::uzawa_contact(double c) {
+  ContactSetT<D>& cs = contact_;
   const double dt = s_.dt;
   double omega = 1.0, last_change = 1e300;
   for (contact_sweeps_ = 1; contact_sweeps_ <= set_.uzawa_sweeps; ++contact_sweeps_) {
@@ -289,13 +334,13 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
     double change = 0.0, size = 0.0;
     for (int k : cs.active) {
       const ContactCandidate& cc = cs.candidates[k];
-      const LocalPair hy = stencil_dot(k, y_);
-      const LocalPair x{x_free_[k].n + c * hy.n, x_free_[k].t + c * hy.t};
+      const Local hy = stencil_dot(k, y_);
+      const Local x{x_free_[k].n + c * hy.n, x_free_[k].t + c * hy.t};
       const double rho = omega / weight_[k];
-      LocalPair& r = cs.reaction[k];
-      const LocalPair next = bipotential_correct(r, x, cc.friction_coeff, rho);
-      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
-      size = std::max(size, std::hypot(next.n, next.t));
+      Local& r = cs.reaction[k];
+      const Local next = bipotential_correct(r, x, cc.friction_coeff, rho);
+      change = std::max(change, local_distance(next, r));
+      size = std::max(size, local_norm(next));
       r = next;
     }
     if (change <= run_.contact.tolerance * size || change == 0.0) {
@@ -317,31 +362,32 @@ bool ImplicitIntegrator::uzawa_contact(double c) {
 // plane the directions, stay the same over many iterations and steps. Returns false only when a
 // linear solve fails; whether Gauss-Seidel converged within contact.max_sweeps is
 // contact_converged_.
-bool ImplicitIntegrator::column_cached(int slot, const Stencil& st, const Vec2& direction) const {
+template <class M>
+bool ImplicitIntegratorT<M>::column_cached(int slot, const Stencil& st, const Vec& direction) const {
   return direct_ && column_factor_[slot] == factor_id_ && column_direction_[slot] == direction &&
          same_stencil(column_stencil_[slot], st);
 }
 
-bool ImplicitIntegrator::exact_contact(double c) {
-  ContactSet& cs = contact_;
+template <class M>
+bool ImplicitIntegratorT<M>::exact_contact(double c) {
+  ContactSetT<D>& cs = contact_;
   const double dt = s_.dt;
-  const int dirs = cs.any_friction ? 2 : 1;
+  const int dirs = cs.any_friction ? D : 1;
   const int m = dirs * static_cast<int>(cs.active.size());
   ++exact_contact_solves_;
   contact_converged_ = false;
-  auto direction = [&](int a) -> Vec2 {
-    const Vec2 n = cs.normal[cs.active[a / dirs]];
-    return a % dirs == 0 ? n : Vec2(n.y(), -n.x());
+  auto direction = [&](int a) -> Vec {
+    return frame_direction(ContactFrame<D>(cs.normal[cs.active[a / dirs]]), a % dirs);
   };
   active_columns_.clear();
   for (int a = 0; a < m; ++a) {
     const int slot = dirs * cs.active[a / dirs] + a % dirs;
     active_columns_.push_back(slot);
     const Stencil& st = cs.stencil[cs.active[a / dirs]];
-    const Vec2 d = direction(a);
+    const Vec d = direction(a);
     if (column_cached(slot, st, d)) continue;
     rhs_.setZero();
-    for (int j = 0; j < st.count; ++j) rhs_.segment<2>(2 * st.node[j]) += st.coef[j] * d;
+    for (int j = 0; j < st.count; ++j) rhs_.template segment<D>(D * st.node[j]) += st.coef[j] * d;
     y_.setZero();
     if (!solve(rhs_, y_)) return false;
     columns_.col(slot) = y_;
@@ -354,7 +400,7 @@ bool ImplicitIntegrator::exact_contact(double c) {
     for (int b = 0; b < m; ++b) {
       double h = 0.0;
       for (int j = 0; j < st.count; ++j)
-        h += st.coef[j] * direction(a).dot(columns_.col(active_columns_[b]).segment<2>(2 * st.node[j]));
+        h += st.coef[j] * direction(a).dot(columns_.col(active_columns_[b]).template segment<D>(D * st.node[j]));
       w_(a, b) = c * dt * h;
     }
   }
@@ -365,33 +411,42 @@ bool ImplicitIntegrator::exact_contact(double c) {
     for (int i = 0; i < static_cast<int>(cs.active.size()); ++i) {
       const int k = cs.active[i];
       const double mu = cs.candidates[k].friction_coeff;
-      LocalPair& r = cs.reaction[k];
-      // x = x_base + W_kk r, x_base = x_free + sum over the other contacts.
-      LocalPair base = x_free_[k];
+      Local& r = cs.reaction[k];
+      // x = x_base + W_kk r, x_base = x_free + sum over the other contacts (row d of W: the
+      // contact's direction d, in the order of its frame).
+      Local base = x_free_[k];
       for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
         if (j == i) continue;
-        const LocalPair rj = cs.reaction[cs.active[j]];
-        base.n += w_(dirs * i, dirs * j) * rj.n + (dirs == 2 ? w_(dirs * i, dirs * j + 1) * rj.t : 0.0);
-        if (dirs == 2) base.t += w_(dirs * i + 1, dirs * j) * rj.n + w_(dirs * i + 1, dirs * j + 1) * rj.t;
-      }
-      LocalPair next;
-      if (dirs == 1) {
-        next = {std::max(0.0, -base.n / w_(i, i)), 0.0};
-      } else {
-        const double wnn = w_(2 * i, 2 * i), wnt = w_(2 * i, 2 * i + 1), wtn = w_(2 * i + 1, 2 * i),
-                     wtt = w_(2 * i + 1, 2 * i + 1);
-        const double rho = 1.0 / std::max(wnn, wtt);
-        next = r;
-        for (int it = 0; it < 200; ++it) {
-          const LocalPair x{base.n + wnn * next.n + wnt * next.t, base.t + wtn * next.n + wtt * next.t};
-          const LocalPair upd = bipotential_correct(next, x, mu, rho);
-          const double d = std::hypot(upd.n - next.n, upd.t - next.t);
-          next = upd;
-          if (d <= 1e-3 * tol * std::hypot(upd.n, upd.t) || d == 0.0) break;
+        const Local rj = cs.reaction[cs.active[j]];
+        for (int d = 0; d < dirs; ++d) {
+          double sum = w_(dirs * i + d, dirs * j) * rj.n;
+          for (int e = 1; e < dirs; ++e) sum += w_(dirs * i + d, dirs * j + e) * component(rj, e);
+          set_component(base, d, component(base, d) + sum);
         }
       }
-      change = std::max(change, std::hypot(next.n - r.n, next.t - r.t));
-      size = std::max(size, std::hypot(next.n, next.t));
+      Local next{};
+      if (dirs == 1) {
+        next.n = std::max(0.0, -base.n / w_(i, i));
+      } else {
+        double w_max = w_(dirs * i, dirs * i);
+        for (int d = 1; d < dirs; ++d) w_max = std::max(w_max, w_(dirs * i + d, dirs * i + d));
+        const double rho = 1.0 / w_max;
+        next = r;
+        for (int it = 0; it < 200; ++it) {
+          Local x = base;
+          for (int d = 0; d < dirs; ++d) {
+            double xd = component(base, d);
+            for (int e = 0; e < dirs; ++e) xd += w_(dirs * i + d, dirs * i + e) * component(next, e);
+            set_component(x, d, xd);
+          }
+          const Local upd = bipotential_correct(next, x, mu, rho);
+          const double d = local_distance(upd, next);
+          next = upd;
+          if (d <= 1e-3 * tol * local_norm(upd) || d == 0.0) break;
+        }
+      }
+      change = std::max(change, local_distance(next, r));
+      size = std::max(size, local_norm(next));
       r = next;
     }
     if (change <= tol * size || change == 0.0) {
@@ -401,8 +456,7 @@ bool ImplicitIntegrator::exact_contact(double c) {
   }
   contact_sweeps_ = std::min(contact_sweeps_, run_.contact.max_sweeps);
   for (int a = 0; a < m; ++a) {
-    const LocalPair r = cs.reaction[cs.active[a / dirs]];
-    r_vec_[a] = dt * (a % dirs == 0 ? r.n : r.t);
+    r_vec_[a] = dt * component(cs.reaction[cs.active[a / dirs]], a % dirs);
   }
   y_.setZero();
   for (int a = 0; a < m; ++a) y_.noalias() += r_vec_[a] * columns_.col(active_columns_[a]);
@@ -410,7 +464,8 @@ bool ImplicitIntegrator::exact_contact(double c) {
   return true;
 }
 
-bool ImplicitIntegrator::step(bool with_energy) {
+template <class M>
+bool ImplicitIntegratorT<M>::step(bool with_energy) {
   const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u0_ = s_.u;
   v0_ = s_.v_half;
@@ -516,10 +571,10 @@ bool ImplicitIntegrator::step(bool with_energy) {
   s_.hourglass_dissipation += dt * (xi * s_.forces.hourglass_power + (1.0 - xi) * hourglass_power0);
   // The step's contact results, from the converged reactions: the contacts with r_n > 0, their
   // statuses and forces, and their work and slip work on the step's displacement.
-  ContactSet& cs = contact_;
+  ContactSetT<D>& cs = contact_;
   begin_step(cs);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
-    const LocalPair r = cs.reaction[k];
+    const Local r = cs.reaction[k];
     if (!(r.n > 0.0)) {
       record(cs, k, ContactStatus::open);
       continue;
@@ -527,7 +582,7 @@ bool ImplicitIntegrator::step(bool with_energy) {
     cs.active.push_back(k);
     record(cs, k, classify(r, cs.candidates[k].friction_coeff));
   }
-  auto du = [&](int j) -> Vec2 { return u1_.segment<2>(2 * j) - u0_.segment<2>(2 * j); };
+  auto du = [&](int j) -> Vec { return u1_.template segment<D>(D * j) - u0_.template segment<D>(D * j); };
   for (int k : cs.active) record_work(cs, k, 1.0, du, true, du);
   finish_step(cs, sweeps, !step_unconverged_);
   v_prev_ = v0_;
@@ -539,7 +594,8 @@ bool ImplicitIntegrator::step(bool with_energy) {
   return true;
 }
 
-RunResult run_implicit(const Model& model, const RunSettings& settings, const ImplicitSettings& implicit,
+template <class M>
+RunResult run_implicit(const M& model, const RunSettings& settings, const ImplicitSettings& implicit,
                        const ProgressFn& progress) {
   if (settings.dt_update_interval != 0)
     throw std::invalid_argument("implicit scheme: the step is fixed (dt_update_interval must be 0)");
@@ -557,11 +613,11 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
     relaxed_ok = relax_displacement(model, settings, relaxed.initial_displacement, result.relaxation);
   }
   const RunSettings& run = result.relaxed ? relaxed : settings;
-  ImplicitIntegrator integrator(model, run, implicit);
+  ImplicitIntegratorT<M> integrator(model, run, implicit);
   const State& s = integrator.state();
   const double kinetic0 = 0.5 * s.v_half.cwiseAbs2().dot(model.mass);
   const bool with_contact = !integrator.contact().candidates.empty();
-  RunMonitor monitor(model, run, result, integrator.contact());
+  RunMonitorT<M> monitor(model, run, result, integrator.contact());
   const long planned = monitor.planned_steps();
   if (!relaxed_ok) {
     monitor.diverge(s, "relaxation: " + result.relaxation.reason);
@@ -596,5 +652,10 @@ RunResult run_implicit(const Model& model, const RunSettings& settings, const Im
   result.factorizations = integrator.factorizations();
   return result;
 }
+
+template class ImplicitIntegratorT<Model>;
+template class ImplicitIntegratorT<Model3>;
+template RunResult run_implicit<Model>(const Model&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
+template RunResult run_implicit<Model3>(const Model3&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
 
 }  // namespace ricochet

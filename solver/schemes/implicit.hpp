@@ -51,9 +51,15 @@ struct ImplicitSettings {
   int refactor_iterations = 6;        // >= 1
 };
 
-class ImplicitIntegrator {
+template <class M>
+class ImplicitIntegratorT {
  public:
-  ImplicitIntegrator(const Model& model, const RunSettings& run, const ImplicitSettings& settings);
+  static constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+  using Stencil = typename Space<D>::Stencil;
+
+  ImplicitIntegratorT(const M& model, const RunSettings& run, const ImplicitSettings& settings);
 
   // t_n -> t_{n+1}. With `with_energy` the energies of the new state are computed. Returns
   // false when Newton or a linear solve fails (failure() says why); the state is then that of
@@ -63,7 +69,7 @@ class ImplicitIntegrator {
   // The state at t_n for the observers: u = u_n, v_half = v_n and a = 0 (so velocity_at_step
   // gives v_n), f_int = f_int(u_n, v_n), forces = its totals.
   const State& state() const { return s_; }
-  const ContactSet& contact() const { return contact_; }
+  const ContactSetT<D>& contact() const { return contact_; }
   const std::vector<double>& residuals() const { return residuals_; }  // relative, last step
   const std::string& failure() const { return failure_; }
   long newton_iterations_total() const { return newton_total_; }
@@ -82,21 +88,22 @@ class ImplicitIntegrator {
   bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
   bool factorize();
   void use_direct();
-  bool column_cached(int slot, const Stencil& st, const Vec2& direction) const;
+  bool column_cached(int slot, const Stencil& st, const Vec& direction) const;
   void build_impulse();
   void add_reaction(int k);                                  // candidate k's reaction into impulse_
-  LocalPair stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
+  Local stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
   bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
   void constrain_matrix();
 
-  const Model& model_;
+  const M& model_;
   const RunSettings& run_;
+  const std::vector<ObstacleOf<M>>& obstacles_;
   ImplicitSettings set_;
   State s_;
-  ContactSet contact_;
+  ContactSetT<D> contact_;
   // Per candidate, the local problem x = x_free + w r of the current Newton iterate (w: the
   // diagonal estimate of the local compliance).
-  std::vector<LocalPair> x_free_;
+  std::vector<Local> x_free_;
   std::vector<double> weight_;
   int contact_sweeps_ = 0;           // sweeps of the last contact solve
   bool contact_converged_ = true;    // the last contact solve met its tolerance
@@ -108,12 +115,12 @@ class ImplicitIntegrator {
   bool refactor_next_ = true;  // the next Newton iteration assembles and factorizes A
   int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
   long factorizations_ = 0;
-  // A^-1 H^T e per contact candidate k and direction d (normal, tangent) in column
-  // dirs k + d (2n x dirs candidates). On the direct path a column is reused while the factor,
+  // A^-1 H^T e per contact candidate k and direction d (normal, then the tangents) in column
+  // dirs k + d (Dn x dirs candidates). On the direct path a column is reused while the factor,
   // the candidate's stencil and its direction are those it was computed with.
   Eigen::MatrixXd columns_;
   std::vector<long> column_factor_;      // factor_id_ of each column, -1: none
-  std::vector<Vec2> column_direction_;
+  std::vector<Vec, Eigen::aligned_allocator<Vec>> column_direction_;
   std::vector<Stencil> column_stencil_;
   std::vector<int> active_columns_;      // column of each active contact direction
   Eigen::MatrixXd w_;         // condensed compliance (m x m)
@@ -137,7 +144,11 @@ class ImplicitIntegrator {
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 
-RunResult run_implicit(const Model& model, const RunSettings& settings,
-                       const ImplicitSettings& implicit, const ProgressFn& progress = {});
+using ImplicitIntegrator = ImplicitIntegratorT<Model>;
+
+// Instantiated for Model and Model3 (implicit.cpp).
+template <class M>
+RunResult run_implicit(const M& model, const RunSettings& settings, const ImplicitSettings& implicit,
+                       const ProgressFn& progress = {});
 
 }  // namespace ricochet
