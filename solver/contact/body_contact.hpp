@@ -220,7 +220,7 @@ struct BoxD {
   }
 };
 using Box2 = BoxD<2>;
-// Any surface type with the list of its nodes (`nodes`): Surface, Surface3 (contact_set.hpp).
+// Any surface type with the list of its nodes (`nodes`): Surface, Surface3 (body_contact3.hpp).
 template <class S, class Pos>
 auto surface_box(const S& surf, const Pos& pos, double margin) {
   using Vec = std::decay_t<decltype(pos(0))>;

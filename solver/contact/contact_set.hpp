@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "solver/contact/body_contact.hpp"
+#include "solver/contact/body_contact3.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/contact/contact_space.hpp"
 #include "solver/contact/coulomb.hpp"
@@ -50,14 +51,10 @@ struct Space<2> {
   using Surface = ricochet::Surface;
   using Box = Box2;
 };
-// The master surface of a 3D body pair. Contact between bodies in 3D (node to face) is not
-// there yet: make_contact_set rejects body pairs for a Model3, so no Surface3 is made; the type
-// completes Space<3> with the two members the dimension-generic code reads (update_boxes,
-// surface_box). Node-to-face contact will give it the master's faces.
-struct Surface3 {
-  std::vector<int> nodes;   // the boundary nodes (for the bounding box)
-  double max_length = 0.0;  // longest reference face edge [m]
-};
+// The master surface of a 3D body pair: Surface3, its faces (body_contact3.hpp). The node-to-face
+// geometry is there; the schemes do not use it yet: make_contact_set rejects body pairs for a
+// Model3, so no Surface3 is made here, and the dimension-generic code reads its nodes and
+// max_length only (update_boxes, surface_box).
 template <>
 struct Space<3> {
   using Vec = Vec3;
