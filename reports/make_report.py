@@ -59,7 +59,6 @@ import argparse
 import datetime
 import html
 import json
-import math
 import os
 import re
 import sys
@@ -77,8 +76,8 @@ import report_stability as RS  # noqa: E402
 import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
-                       fmt_dt, fmt_g, git_commit, read_reference, read_stability, same,
-                       scheme_name)
+                       fmt_dt, fmt_g, git_commit, read_reference, same, scheme_name,
+                       show_path)
 
 FIG1_TIMES = [5e-4, 1e-3, 2e-3, 3e-3]
 FIG2_TIME = 6e-4
@@ -156,12 +155,6 @@ def html_table(tid, header, rows):
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
     return "\n".join(out)
-
-
-def show_path(p):
-    """A path relative to the repository when inside it, else absolute."""
-    p = os.path.abspath(p)
-    return os.path.relpath(p, REPO) if p.startswith(REPO + os.sep) else p
 
 
 def runs_text(ids, limit=None):
@@ -626,89 +619,42 @@ def sec_scheme_limits(ctx):
     return s
 
 
-def _hi_reason(d):
-    hi = d.get("smallest_unstable_dt")
-    if hi is None:
-        return "–"
-    for t in d.get("trials", []):
-        if same(t.get("dt"), hi) and not t.get("stable"):
-            why = t.get("reason") or t.get("status") or ""
-            return why.replace("diverged: ", "")[:120] or "–"
-    return d.get("unstable_by") or "–"
-
-
 def sec_stability(ctx):
     s = Section("stability", "Stability map: largest stable Δt per mesh and scheme (beyond the paper)", "figure")
     files = ctx.get("stab_files") or []
-    entries, rows, bad = [], [], []
-    for p in files:
-        try:
-            d = read_stability(p)
-        except (OSError, ValueError) as e:
-            bad.append(f"{p}: {e}")
-            continue
-        e = {"mesh": d.get("mesh", "?"), "scheme": d.get("scheme", "?"),
-             "estimate": d.get("estimate") or d.get("critical_dt"),
-             "lo": d.get("largest_stable_dt"), "hi": d.get("smallest_unstable_dt"),
-             "outcome": d.get("outcome", "?"), "cap": (d.get("search") or {}).get("cap"),
-             "width": d.get("bracket_width"), "path": p, "d": d}
-        entries.append(e)
+    entries, bad = RS.read_stability_entries(files)
     if not entries:
         s.available = False
         s.missing = ("no stability.json found" + (f" ({'; '.join(bad)})" if bad else "") +
                      ". Run `" + STAB_CMD + "` " + STAB_MORE + " and pass `--stability results/stability` "
                      "(or place the folder next to the paper sweep as `stability/`).")
         return s
-    # one point per (mesh, scheme): the narrowest bracket
-    best = {}
-    for e in entries:
-        k = (e["mesh"], e["scheme"])
-        w = e["width"] if e["width"] is not None else math.inf
-        if k not in best or w < (best[k]["width"] if best[k]["width"] is not None else math.inf):
-            best[k] = e
+    best = RS.best_entries(entries)
     sw = ctx["main"]
     paper = ctx.get("paper", True)
     marks = [(r.mesh, r.scheme, r.dt, r.status)
              for r in (sw.find(group="table1") if paper else sw.find())
              if r.status in ("ok", "diverged") and r.dt is not None]
-    marks = [m for m in marks if any(m[0] == e["mesh"] for e in best.values())]
+    marks = [m for m in marks if any(m[0] == e["mesh"] for e in best)]
     if paper:
         cols, _ = paper_table1(ctx["ref"])
         dts = sorted({d for _, d in cols}) or [1e-6, 1e-5, 1e-4]
-        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts)
+        s.files = F.fig_stability(ctx["out"], "stability_map", best, marks, dts)
         marks_text = ("Small squares / black X: the Table 1 runs of the paper sweep that "
                       "finished ok / diverged, at the paper's Δt (dotted lines). ")
     else:
         dts = sorted({m[2] for m in marks})
         dts = dts if len(dts) <= 6 else []
-        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts,
+        s.files = F.fig_stability(ctx["out"], "stability_map", best, marks, dts,
                                   dt_label="sweep Δt", mark_label="sweep run")
         marks_text = (f"Small squares / black X: the runs of the sweep `{sw.name}` on these "
                       "meshes and schemes that finished ok / diverged"
                       + (", at their Δt (dotted lines). " if dts else ". "))
     s.sources = [e["path"] for e in entries]
-    s.runs = [os.path.dirname(e["path"]) for e in best.values()]
-    for e in sorted(entries, key=lambda e: (e["mesh"], e["scheme"])):
-        d = e["d"]
-        est = e["estimate"]
-        rows.append([f"{e['mesh']} {scheme_name(e['scheme'])}", f"{fmt_g(est, 4)} s",
-                     f"{fmt_g(e['lo'], 4)} s" if e["lo"] else "–",
-                     f"{fmt_g(e['hi'], 4)} s" if e["hi"] else "–",
-                     f"{e['lo'] / est:.4g}" if e["lo"] and est else "–",
-                     e["outcome"], _hi_reason(d),
-                     f"{d.get('criterion', {}).get('energy_error_max_bound', '–')}",
-                     str(d.get("runs", "–")), f"`{show_path(e['path'])}`"])
+    s.runs = [os.path.dirname(e["path"]) for e in best]
     s.extra.append(("stability_table", "Largest stable Δt found by `ricochet stability` "
-                    "(docs/stability.md)",
-                    ["mesh, scheme", "estimate Δt_crit", "largest stable", "smallest unstable",
-                     "stable / estimate", "outcome", "why the smallest unstable Δt failed",
-                     "energy bound", "trials", "file"], rows))
-    summ = "; ".join(
-        f"{e['mesh']} {scheme_name(e['scheme'])}: "
-        + (f"{fmt_g(e['lo'], 3)} s = {e['lo'] / e['estimate']:.3g} × the estimate"
-           if e["lo"] else "no stable Δt")
-        + (" (no unstable Δt up to the cap)" if e["outcome"] == "no_unstable_up_to_cap" else "")
-        for e in sorted(best.values(), key=lambda e: (e["mesh"], e["scheme"])))
+                    "(docs/stability.md)", RS.STABILITY_HEADER, RS.stability_rows(entries)))
+    summ = RS.stability_summary(best)
     s.caption = (
         "Largest stable Δt (filled circle) and smallest unstable Δt (cross) per mesh and "
         "scheme, found by bisection over whole runs, against the estimate Δt_crit = min "
@@ -717,7 +663,7 @@ def sec_stability(ctx):
         "table below says why the smallest unstable Δt failed: for the explicit schemes a "
         "blow-up (inverted element or energy growth), for the implicit scheme a Newton or "
         "contact iteration that no longer converges. " + summ +
-        ". Sources: " + runs_text(show_path(e["path"]) for e in best.values()) + ".")
+        ". Sources: " + runs_text(show_path(e["path"]) for e in best) + ".")
     return s
 
 
