@@ -700,7 +700,7 @@ class ReportSmoke(unittest.TestCase):
         rows = {r["run_id"]: r for r in read_csv(os.path.join(self.td, "summary.csv"))}
         bar = tables["tab-td_bar_table"]
         bar_ids = sorted(i for i, r in rows.items() if r["case"] == "bar_wall3" and r["status"] == "ok")
-        self.assertEqual(len(bar_ids), 5)
+        self.assertEqual(len(bar_ids), 6)   # the three schemes, stiff springs, hourglass, tet4
         self.assertEqual(sorted(r[0] for r in bar), bar_ids)
         for r in bar:
             f = float(rows[r[0]]["contact_force_mean"])
@@ -715,16 +715,19 @@ class ReportSmoke(unittest.TestCase):
         for r in ob:
             if r[1] not in col:
                 continue
-            scheme, mu = r[0].split(", ")
+            label, mu = r[0].split(", ")
+            scheme = {"semi-explicit": "semi_explicit", "implicit": "implicit",
+                      "explicit penalty": "explicit_penalty"}[label]
             pick = lambda g: next(v for v in rows.values() if v["group"] == g and v["status"] == "ok"  # noqa: E731
                                   and float(v["obstacles[0].friction"]) == float(mu)
-                                  and (v["summary.scheme"] == "semi_explicit") == scheme.startswith("semi"))
-            a, b = float(pick("oblique")[col[r[1]]]), float(pick("oblique2d")[col[r[1]]])
+                                  and v["summary.scheme"] == scheme)
+            a = float(pick(R3.oblique_group(scheme))[col[r[1]]])
+            b = float(pick("oblique2d")[col[r[1]]])
             self.assertEqual(r[4], f"{a / b:.4f}", r)
             checked += 1
-        self.assertEqual(checked, 12)  # 3 quantities x 2 schemes x 2 mu
+        self.assertEqual(checked, 18)  # 3 quantities x 3 schemes x 2 mu
         frame = tables["tab-td_frame"]
-        self.assertEqual(len(frame), 10)
+        self.assertEqual(len(frame), 15)  # 5 quantities x 3 schemes
         for r in frame:
             self.assertLess(float(r[4]), 1e-9, r)
         cap = section_html(page, "td_shapes")
