@@ -12,6 +12,8 @@ Kim–Kwak-type problem and the 3D cases (report_three_d.py).
                                                 [--envelope ENV_DIR] [--long-runs LONG_DIR]
                                                 [--three-d TD_DIR] [--three-d-refinement TDR_DIR]
                                                 [--three-d-fields FIELDS_DIR]
+                                                [--three-d-table1 TDT1_DIR]
+                                                [--three-d-stability TDS_DIR]
                                                 [--out OUT] [--max-run-plots N] [--no-discover]
 
 DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
@@ -33,6 +35,10 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            refinement sweep cases/three_d/refinement.toml and a run of
            cases/three_d/oblique_block.toml with fields (the 3D part: report_three_d.py). Without
            --three-d, DIR itself when its runs are the 3D cases.
+--three-d-table1, --three-d-stability  the sweep of cases/three_d/table1.toml (or
+           table1_fast.toml: Table 1 in 3D) and a folder of `ricochet stability` results of the
+           3D meshes (subfolders with stability.json). Without --three-d-table1, DIR itself when
+           it is that sweep.
 --long-runs a finished sweep of cases/long_runs/sweep.toml with the drift.csv of
            reports/long_runs.py (energy residual per scene and scheme, the drift table). Without
            it, DIR itself when it holds a drift.csv.
@@ -43,10 +49,12 @@ For the paper's sweep, without --accuracy / --stability / --verification / --kim
 DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification, DIR/verification,
 DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove, DIR/rubber_groove, DIR/../envelope,
 DIR/envelope, DIR/../long_runs, DIR/long_runs, DIR/../three_d, DIR/three_d,
-DIR/../three_d_refinement, DIR/three_d_refinement, DIR/../oblique_block and DIR/oblique_block
+DIR/../three_d_refinement, DIR/three_d_refinement, DIR/../oblique_block, DIR/oblique_block,
+DIR/../three_d_table1, DIR/three_d_table1, DIR/../three_d_stability and DIR/three_d_stability
 (unless --no-discover); a source that is missing
 gives a "not available" section saying how to produce it, never a crash. For any other sweep
-only DIR/stability is looked for, and parts without data are left out.
+only DIR/stability is looked for, and for a 3D sweep (cases/three_d/sweep.toml or table1.toml)
+the other 3D sources as above; parts without data are left out.
 
 Writes OUT/index.html (self-contained apart from its relative figure links), OUT/report.md,
 OUT/manifest.json (figures, tables and their row labels) and the figures (PNG; SVG for the
@@ -59,7 +67,6 @@ import argparse
 import datetime
 import html
 import json
-import math
 import os
 import re
 import sys
@@ -77,8 +84,8 @@ import report_stability as RS  # noqa: E402
 import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
-                       fmt_dt, fmt_g, git_commit, read_reference, read_stability, same,
-                       scheme_name)
+                       fmt_dt, fmt_g, git_commit, read_reference, same, scheme_name,
+                       show_path)
 
 FIG1_TIMES = [5e-4, 1e-3, 2e-3, 3e-3]
 FIG2_TIME = 6e-4
@@ -156,12 +163,6 @@ def html_table(tid, header, rows):
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
     return "\n".join(out)
-
-
-def show_path(p):
-    """A path relative to the repository when inside it, else absolute."""
-    p = os.path.abspath(p)
-    return os.path.relpath(p, REPO) if p.startswith(REPO + os.sep) else p
 
 
 def runs_text(ids, limit=None):
@@ -626,89 +627,42 @@ def sec_scheme_limits(ctx):
     return s
 
 
-def _hi_reason(d):
-    hi = d.get("smallest_unstable_dt")
-    if hi is None:
-        return "–"
-    for t in d.get("trials", []):
-        if same(t.get("dt"), hi) and not t.get("stable"):
-            why = t.get("reason") or t.get("status") or ""
-            return why.replace("diverged: ", "")[:120] or "–"
-    return d.get("unstable_by") or "–"
-
-
 def sec_stability(ctx):
     s = Section("stability", "Stability map: largest stable Δt per mesh and scheme (beyond the paper)", "figure")
     files = ctx.get("stab_files") or []
-    entries, rows, bad = [], [], []
-    for p in files:
-        try:
-            d = read_stability(p)
-        except (OSError, ValueError) as e:
-            bad.append(f"{p}: {e}")
-            continue
-        e = {"mesh": d.get("mesh", "?"), "scheme": d.get("scheme", "?"),
-             "estimate": d.get("estimate") or d.get("critical_dt"),
-             "lo": d.get("largest_stable_dt"), "hi": d.get("smallest_unstable_dt"),
-             "outcome": d.get("outcome", "?"), "cap": (d.get("search") or {}).get("cap"),
-             "width": d.get("bracket_width"), "path": p, "d": d}
-        entries.append(e)
+    entries, bad = RS.read_stability_entries(files)
     if not entries:
         s.available = False
         s.missing = ("no stability.json found" + (f" ({'; '.join(bad)})" if bad else "") +
                      ". Run `" + STAB_CMD + "` " + STAB_MORE + " and pass `--stability results/stability` "
                      "(or place the folder next to the paper sweep as `stability/`).")
         return s
-    # one point per (mesh, scheme): the narrowest bracket
-    best = {}
-    for e in entries:
-        k = (e["mesh"], e["scheme"])
-        w = e["width"] if e["width"] is not None else math.inf
-        if k not in best or w < (best[k]["width"] if best[k]["width"] is not None else math.inf):
-            best[k] = e
+    best = RS.best_entries(entries)
     sw = ctx["main"]
     paper = ctx.get("paper", True)
     marks = [(r.mesh, r.scheme, r.dt, r.status)
              for r in (sw.find(group="table1") if paper else sw.find())
              if r.status in ("ok", "diverged") and r.dt is not None]
-    marks = [m for m in marks if any(m[0] == e["mesh"] for e in best.values())]
+    marks = [m for m in marks if any(m[0] == e["mesh"] for e in best)]
     if paper:
         cols, _ = paper_table1(ctx["ref"])
         dts = sorted({d for _, d in cols}) or [1e-6, 1e-5, 1e-4]
-        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts)
+        s.files = F.fig_stability(ctx["out"], "stability_map", best, marks, dts)
         marks_text = ("Small squares / black X: the Table 1 runs of the paper sweep that "
                       "finished ok / diverged, at the paper's Δt (dotted lines). ")
     else:
         dts = sorted({m[2] for m in marks})
         dts = dts if len(dts) <= 6 else []
-        s.files = F.fig_stability(ctx["out"], "stability_map", list(best.values()), marks, dts,
+        s.files = F.fig_stability(ctx["out"], "stability_map", best, marks, dts,
                                   dt_label="sweep Δt", mark_label="sweep run")
         marks_text = (f"Small squares / black X: the runs of the sweep `{sw.name}` on these "
                       "meshes and schemes that finished ok / diverged"
                       + (", at their Δt (dotted lines). " if dts else ". "))
     s.sources = [e["path"] for e in entries]
-    s.runs = [os.path.dirname(e["path"]) for e in best.values()]
-    for e in sorted(entries, key=lambda e: (e["mesh"], e["scheme"])):
-        d = e["d"]
-        est = e["estimate"]
-        rows.append([f"{e['mesh']} {scheme_name(e['scheme'])}", f"{fmt_g(est, 4)} s",
-                     f"{fmt_g(e['lo'], 4)} s" if e["lo"] else "–",
-                     f"{fmt_g(e['hi'], 4)} s" if e["hi"] else "–",
-                     f"{e['lo'] / est:.4g}" if e["lo"] and est else "–",
-                     e["outcome"], _hi_reason(d),
-                     f"{d.get('criterion', {}).get('energy_error_max_bound', '–')}",
-                     str(d.get("runs", "–")), f"`{show_path(e['path'])}`"])
+    s.runs = [os.path.dirname(e["path"]) for e in best]
     s.extra.append(("stability_table", "Largest stable Δt found by `ricochet stability` "
-                    "(docs/stability.md)",
-                    ["mesh, scheme", "estimate Δt_crit", "largest stable", "smallest unstable",
-                     "stable / estimate", "outcome", "why the smallest unstable Δt failed",
-                     "energy bound", "trials", "file"], rows))
-    summ = "; ".join(
-        f"{e['mesh']} {scheme_name(e['scheme'])}: "
-        + (f"{fmt_g(e['lo'], 3)} s = {e['lo'] / e['estimate']:.3g} × the estimate"
-           if e["lo"] else "no stable Δt")
-        + (" (no unstable Δt up to the cap)" if e["outcome"] == "no_unstable_up_to_cap" else "")
-        for e in sorted(best.values(), key=lambda e: (e["mesh"], e["scheme"])))
+                    "(docs/stability.md)", RS.STABILITY_HEADER, RS.stability_rows(entries)))
+    summ = RS.stability_summary(best)
     s.caption = (
         "Largest stable Δt (filled circle) and smallest unstable Δt (cross) per mesh and "
         "scheme, found by bisection over whole runs, against the estimate Δt_crit = min "
@@ -717,7 +671,7 @@ def sec_stability(ctx):
         "table below says why the smallest unstable Δt failed: for the explicit schemes a "
         "blow-up (inverted element or energy growth), for the implicit scheme a Newton or "
         "contact iteration that no longer converges. " + summ +
-        ". Sources: " + runs_text(show_path(e["path"]) for e in best.values()) + ".")
+        ". Sources: " + runs_text(show_path(e["path"]) for e in best) + ".")
     return s
 
 
@@ -857,7 +811,8 @@ SWEEP_SECTIONS = [
     ("verification", lambda c: RV.sections(c, Section) if c.get("ver") else []),
     ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")
      else []),
-    ("three_d", lambda c: R3.sections(c, Section) if c.get("td") or c.get("td_fields") else []),
+    ("three_d", lambda c: R3.sections(c, Section) if c.get("td") or c.get("td_fields")
+     or c.get("td_t1") or c.get("td_stab") else []),
     ("histories", sec_histories),
 ]
 
@@ -1013,6 +968,8 @@ def render(ctx, sections):
            "three_d": ctx["td"].dir if ctx.get("td") else None,
            "three_d_refinement": ctx["td_ref"].dir if ctx.get("td_ref") else None,
            "three_d_fields": ctx.get("td_fields"),
+           "three_d_table1": ctx["td_t1"].dir if ctx.get("td_t1") else None,
+           "three_d_stability": ctx.get("td_stab") or [],
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
@@ -1050,16 +1007,57 @@ def discover(main_dir, args):
     fields = args.kim_kwak_fields
     if fields is None and not args.no_discover:
         fields = next((c for c in places("rubber_groove") if RK.find_fields(c)), None)
-    td_fields = args.three_d_fields
-    if td_fields is None and not args.no_discover:
-        td_fields = next((c for c in places("oblique_block") if RK.find_fields(c)), None)
-    three_d = (sweep_folder(args.three_d, "three_d"),
-               sweep_folder(args.three_d_refinement, "three_d_refinement"),
-               os.path.abspath(td_fields) if td_fields else None)
+    three_d = discover_three_d(main_dir, args)
     return (sweep_folder(args.accuracy, "accuracy"), stab,
             sweep_folder(args.verification, "verification"), sweep_folder(args.kim_kwak, "kim_kwak"),
             os.path.abspath(fields) if fields else None,
             sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"), three_d)
+
+
+def discover_three_d(main_dir, args, found=()):
+    """The 3D sources (sweep, refinement sweep, fields run, Table 1 sweep, stability folders):
+    as given, else found beside or inside main_dir (unless --no-discover). found: the
+    (sweep, Table 1 sweep) already known, e.g. the main sweep itself."""
+    parent = os.path.dirname(os.path.abspath(main_dir))
+    places = lambda name: (os.path.join(parent, name), os.path.join(main_dir, name))  # noqa: E731
+    td, t1 = found or (args.three_d, args.three_d_table1)
+
+    def sweep_folder(given, name):
+        if given is not None or args.no_discover:
+            return given
+        return next((c for c in places(name) if os.path.exists(os.path.join(c, "summary.csv"))), None)
+
+    td_fields = args.three_d_fields
+    if td_fields is None and not args.no_discover:
+        td_fields = next((c for c in places("oblique_block") if RK.find_fields(c)), None)
+    stab = args.three_d_stability
+    if stab is None and not args.no_discover:
+        stab = next((c for c in places("three_d_stability") if os.path.isdir(c)), None)
+    return (sweep_folder(td, "three_d"), sweep_folder(args.three_d_refinement, "three_d_refinement"),
+            os.path.abspath(td_fields) if td_fields else None, sweep_folder(t1, "three_d_table1"),
+            os.path.abspath(stab) if stab else None)
+
+
+def is_three_d_table1(sweep, cases):
+    """The sweep of cases/three_d/table1.toml (or table1_fast.toml): its name, or the groups
+    table1 and penalty on the oblique block."""
+    return (sweep.name.startswith("three_d_table1")
+            or ({"table1", "penalty"} <= {r.group for r in sweep.runs} and cases == {"oblique_block"}))
+
+
+def td_t1_meta(t1, err, stab_dir, stab_files):
+    if t1 is None:
+        line = "not available" + (f" ({err})" if err else "") + f": run `{R3.T1_CMD}`"
+    else:
+        line = (f"`{t1.dir}` (sweep `{t1.name}`, {len(t1.runs)} runs; jobs "
+                f"{t1.meta.get('jobs', '?')}, repeat {t1.meta.get('repeat', '?')})")
+    if stab_files:
+        line += "; stability " + ", ".join(f"`{show_path(p)}`" for p in stab_files)
+    else:
+        line += ("; stability not available" + (f" (no stability.json in `{show_path(stab_dir)}`)"
+                                                if stab_dir else "")
+                 + f": run `{R3.STAB_CMD}` {R3.STAB_MORE}")
+    return line
 
 
 def td_meta(td, err, ref, ref_err):
@@ -1146,8 +1144,16 @@ def generic_sources(main_sweep, args):
     td = args.three_d
     if td is None and "bar_wall3" in cases and "oblique_block" in cases:
         td = main_sweep.dir
-    three_d = (td, args.three_d_refinement,
-               os.path.abspath(args.three_d_fields) if args.three_d_fields else None)
+    t1 = args.three_d_table1
+    if t1 is None and is_three_d_table1(main_sweep, cases):
+        t1 = main_sweep.dir
+    if main_sweep.dir in (td, t1):
+        # a 3D sweep: the other 3D sources beside it, as for the paper's sweep
+        three_d = discover_three_d(main_sweep.dir, args, (td, t1))
+    else:
+        three_d = (td, args.three_d_refinement,
+                   os.path.abspath(args.three_d_fields) if args.three_d_fields else None, t1,
+                   os.path.abspath(args.three_d_stability) if args.three_d_stability else None)
     return args.accuracy, stab, ver, kk, fields, env, long_dir, three_d
 
 
@@ -1174,13 +1180,18 @@ def main(argv=None):
                     help="3D refinement sweep folder (cases/three_d/refinement.toml)")
     ap.add_argument("--three-d-fields", metavar="FIELDS_DIR",
                     help="run folder of cases/three_d/oblique_block.toml with fields/*.vtu")
+    ap.add_argument("--three-d-table1", metavar="TDT1_DIR",
+                    help="3D Table 1 sweep folder (cases/three_d/table1.toml or table1_fast.toml)")
+    ap.add_argument("--three-d-stability", metavar="TDS_DIR",
+                    help="folder of ricochet stability results of the 3D meshes (subfolders "
+                         "with stability.json)")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
     ap.add_argument("--no-discover", action="store_true",
                     help="do not look for accuracy/, stability/, verification/, kim_kwak/, "
-                         "rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/ and "
-                         "oblique_block/ next to DIR")
+                         "rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, "
+                         "oblique_block/, three_d_table1/ and three_d_stability/ next to DIR")
     args = ap.parse_args(argv)
     if args.max_run_plots < 0:
         ap.error(f"--max-run-plots {args.max_run_plots}: must be 0 or more")
@@ -1206,7 +1217,7 @@ def main(argv=None):
     else:
         acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d = \
             generic_sources(main_sweep, args)
-    td_dir, td_ref_dir, td_fields = three_d
+    td_dir, td_ref_dir, td_fields, td_t1_dir, td_stab_dir = three_d
     same_dir = lambda d: d is not None and os.path.abspath(d) == main_sweep.dir  # noqa: E731
     acc, acc_err = read_sweep(acc_dir, "accuracy") if acc_dir else (None, None)
     ver, ver_err = ((main_sweep, None) if same_dir(ver_dir) else
@@ -1218,6 +1229,9 @@ def main(argv=None):
     td, td_err = ((main_sweep, None) if same_dir(td_dir) else
                   read_sweep(td_dir, "three_d") if td_dir else (None, None))
     td_ref, td_ref_err = read_sweep(td_ref_dir, "three_d_refinement") if td_ref_dir else (None, None)
+    td_t1, td_t1_err = ((main_sweep, None) if same_dir(td_t1_dir) else
+                        read_sweep(td_t1_dir, "three_d_table1") if td_t1_dir else (None, None))
+    td_stab = find_stability_files([td_stab_dir]) if td_stab_dir else []
     env, env_err = None, None     # env: (Sweep, [EnvPoint]) of the envelope sweep
     if env_dir:
         sw_env, got = RS.read_envelope(env_dir)
@@ -1235,7 +1249,8 @@ def main(argv=None):
            "kk_fields": kk_fields, "paper": paper, "title": title,
            "max_run_plots": args.max_run_plots, "env": env, "env_err": env_err,
            "long": long_sw, "long_err": long_err, "td": td, "td_err": td_err, "td_ref": td_ref,
-           "td_ref_err": td_ref_err, "td_fields": td_fields}
+           "td_ref_err": td_ref_err, "td_fields": td_fields, "td_t1": td_t1,
+           "td_t1_err": td_t1_err, "td_stab": td_stab}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -1276,6 +1291,7 @@ def main(argv=None):
             ("3D sweeps", td_meta(td, td_err, td_ref, td_ref_err)),
             ("3D fields run", f"`{show_path(td_fields)}`" if td_fields else
              f"not available: run `{R3.FIELDS_CMD}`"),
+            ("3D Table 1", td_t1_meta(td_t1, td_t1_err, td_stab_dir, td_stab)),
         ] + common_tail + [
             ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & "
                                 "Magnain, C. R. Mécanique 338 (2010) 176–180)"),
@@ -1304,6 +1320,12 @@ def main(argv=None):
             meta.append(("Long-run sweep", long_meta(long_sw, long_err)))
         elif long_err:
             meta.append(("Long-run sweep", f"could not be read ({long_err})"))
+        if (td is not None and td is not main_sweep) or td_err or td_ref is not None:
+            meta.append(("3D sweeps", td_meta(td, td_err, td_ref, td_ref_err)))
+        if td_fields:
+            meta.append(("3D fields run", f"`{show_path(td_fields)}`"))
+        if (td_t1 is not None and td_t1 is not main_sweep) or td_t1_err or td_stab:
+            meta.append(("3D Table 1", td_t1_meta(td_t1, td_t1_err, td_stab_dir, td_stab)))
         meta += common_tail + [("Report written", now)]
     ctx["meta"] = meta
 

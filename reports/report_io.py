@@ -474,6 +474,12 @@ def read_stability(path):
     return d
 
 
+def show_path(p):
+    """A path relative to the repository when inside it, else absolute."""
+    p = os.path.abspath(p)
+    return os.path.relpath(p, REPO) if p.startswith(REPO + os.sep) else p
+
+
 def git_commit(path):
     """(short hash, dirty flag) of the git work tree holding path, or (None, None)."""
     try:

@@ -75,6 +75,7 @@ sys.path.insert(0, os.path.join(REPO, "reports"))
 import report_kim_kwak as RK  # noqa: E402
 import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402  (the case specs: which sections to expect)
+from report_io import fmt_g  # noqa: E402  (the cells' number format)
 
 BINARY = None
 
@@ -160,8 +161,9 @@ KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
 KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
 KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
 KK_IDS = ("kk_shapes", "kk_histories", "kk_interfaces", "kk_runs")
-TD_IDS = ("td_shapes", "td_bar", "td_oblique", "td_frame")
+TD_IDS = ("td_shapes", "td_bar", "td_oblique", "td_frame", "td_table1")
 TD_SWEEP = os.path.join(REPO, "cases", "three_d", "sweep.toml")
+TD_T1_SWEEP = os.path.join(REPO, "cases", "three_d", "table1_fast.toml")
 TD_GATES = os.path.join(REPO, "ci", "gates", "three_d.toml")
 TD_CASE = os.path.join(REPO, "cases", "three_d", "oblique_block.toml")
 ENV_IDS = ("envelope", "envelope_unsafe")           # report_stability.py: the envelope sweep
@@ -494,6 +496,15 @@ class ReportSmoke(unittest.TestCase):
         # given with --three-d-fields
         cls.td = os.path.join(t, "sweeps", "three_d")
         cls.td_fields = os.path.join(t, "other", "oblique_block")
+        # the fast 3D Table 1 (one diverged run) in the background and one stability search of
+        # a 3D mesh, both next to the paper sweep (discovered)
+        cls.td_t1 = os.path.join(t, "sweeps", "three_d_table1")
+        cls.td_stab = os.path.join(t, "sweeps", "three_d_stability")
+        t1_cmd = [BINARY, "sweep", TD_T1_SWEEP, "--out", cls.td_t1, "--quiet"]
+        t1 = subprocess.Popen(t1_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        run([BINARY, "stability", TD_CASE, "--set", "mesh=M1x2", "--set", "scheme=semi_explicit",
+             "--set", "obstacles[0].friction=0", "--max-runs", "4", "--quiet",
+             "--out", os.path.join(cls.td_stab, "semi_explicit_M1x2")], ok=(0, 4, 5))
         run([BINARY, "sweep", TD_SWEEP, "--out", cls.td, "--check", TD_GATES, "--quiet",
              "--jobs", "2"], ok=(0, 4))
         run([BINARY, "run", TD_CASE, "--out", cls.td_fields, "--quiet", "--set",
@@ -525,6 +536,9 @@ class ReportSmoke(unittest.TestCase):
         out, err = kk.communicate(timeout=CALL_TIMEOUT)
         if kk.returncode not in (0, 4):
             raise AssertionError(f"{' '.join(kk_cmd)}: exit {kk.returncode}\n{out}\n{err}")
+        out, err = t1.communicate(timeout=CALL_TIMEOUT)
+        if t1.returncode != 0:
+            raise AssertionError(f"{' '.join(t1_cmd)}: exit {t1.returncode}\n{out}\n{err}")
         # 1: no accuracy / stability / verification / Kim–Kwak-type sources, default output
         # folder DIR/report
         run([PY, SCRIPT, cls.paper, "--no-discover", "--max-run-plots", "3"])
@@ -588,8 +602,11 @@ class ReportSmoke(unittest.TestCase):
             self.assertIn("cases/envelope/envelope.toml", section_html(page, sid))
             self.assertIn("--envelope", section_html(page, sid))
         self.assertIn("cases/three_d/oblique_block.toml", section_html(page, "td_shapes"))
-        for sid in TD_IDS[1:]:
+        for sid in ("td_bar", "td_oblique", "td_frame"):
             self.assertIn("cases/three_d/sweep.toml", section_html(page, sid))
+        self.assertIn("build/ricochet sweep cases/three_d/table1.toml", section_html(page, "td_table1"))
+        self.assertIsNone(man["three_d_table1"])
+        self.assertEqual(man["three_d_stability"], [])
         for sid in LONG_IDS:
             self.assertIn("cases/long_runs/sweep.toml", section_html(page, sid))
             self.assertIn("reports/long_runs.py", section_html(page, sid))
@@ -653,7 +670,8 @@ class ReportSmoke(unittest.TestCase):
                           ("kk_histories", "kim_kwak_histories"),
                           ("kk_interfaces", "kim_kwak_interfaces"),
                           ("long_runs", "long_runs_residual"),
-                          ("td_shapes", "three_d_shapes"), ("td_bar", "three_d_bar")):
+                          ("td_shapes", "three_d_shapes"), ("td_bar", "three_d_bar"),
+                          ("td_table1", "three_d_table1")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -700,7 +718,7 @@ class ReportSmoke(unittest.TestCase):
         rows = {r["run_id"]: r for r in read_csv(os.path.join(self.td, "summary.csv"))}
         bar = tables["tab-td_bar_table"]
         bar_ids = sorted(i for i, r in rows.items() if r["case"] == "bar_wall3" and r["status"] == "ok")
-        self.assertEqual(len(bar_ids), 5)
+        self.assertEqual(len(bar_ids), 6)   # the three schemes, stiff springs, hourglass, tet4
         self.assertEqual(sorted(r[0] for r in bar), bar_ids)
         for r in bar:
             f = float(rows[r[0]]["contact_force_mean"])
@@ -715,21 +733,86 @@ class ReportSmoke(unittest.TestCase):
         for r in ob:
             if r[1] not in col:
                 continue
-            scheme, mu = r[0].split(", ")
+            label, mu = r[0].split(", ")
+            scheme = {"semi-explicit": "semi_explicit", "implicit": "implicit",
+                      "explicit penalty": "explicit_penalty"}[label]
             pick = lambda g: next(v for v in rows.values() if v["group"] == g and v["status"] == "ok"  # noqa: E731
                                   and float(v["obstacles[0].friction"]) == float(mu)
-                                  and (v["summary.scheme"] == "semi_explicit") == scheme.startswith("semi"))
-            a, b = float(pick("oblique")[col[r[1]]]), float(pick("oblique2d")[col[r[1]]])
+                                  and v["summary.scheme"] == scheme)
+            a = float(pick(R3.oblique_group(scheme))[col[r[1]]])
+            b = float(pick("oblique2d")[col[r[1]]])
             self.assertEqual(r[4], f"{a / b:.4f}", r)
             checked += 1
-        self.assertEqual(checked, 12)  # 3 quantities x 2 schemes x 2 mu
+        self.assertEqual(checked, 18)  # 3 quantities x 3 schemes x 2 mu
         frame = tables["tab-td_frame"]
-        self.assertEqual(len(frame), 10)
+        self.assertEqual(len(frame), 15)  # 5 quantities x 3 schemes
         for r in frame:
             self.assertLess(float(r[4]), 1e-9, r)
         cap = section_html(page, "td_shapes")
         self.assertIn("(0, 1, 3 ms; fields/*.vtu)", cap)
         self.assertEqual(by_id["td_shapes"]["runs"], [os.path.abspath(self.td_fields)])
+
+    def test_three_d_table1(self):
+        """Table 1 in 3D from the fast sweep and the stability search found next to the paper
+        sweep: one cell per (mesh, Δt) and scheme with the run's wall time and energy error or
+        its time of divergence, the implicit / semi-explicit ratio, the penalty run, the
+        stability bracket, the figure."""
+        man, page = self.check_files(self.out_full)
+        self.assertEqual(man["three_d_table1"], os.path.abspath(self.td_t1))
+        stab_file = os.path.join(os.path.abspath(self.td_stab), "semi_explicit_M1x2",
+                                 "stability.json")
+        self.assertEqual(man["three_d_stability"], [stab_file])
+        by_id = {s["id"]: s for s in man["sections"]}
+        sec = by_id["td_table1"]
+        self.assertTrue(sec["available"], sec["missing"])
+        self.assertEqual(sec["files"], ["three_d_table1.png", "three_d_table1.svg"])
+        a = matplotlib.image.imread(os.path.join(self.out_full, "three_d_table1.png"))
+        self.assertGreater(float(a.std()), 0.0)
+        parser = Tables()
+        parser.feed(page)
+        rows = read_csv(os.path.join(self.td_t1, "summary.csv"))
+        t1 = [r for r in rows if r["group"] == "table1"]
+        self.assertEqual(len(t1), 4)   # M1x2 x 1e-4, 1e-5 x two schemes
+        self.assertEqual(sorted(sec["runs"]), sorted(r["run_id"] for r in rows))
+        hdr = parser.headers["tab-td_table1_table"]
+        self.assertEqual(hdr, ["scheme", "M1x2, Δt = 1e-4 s", "M1x2, Δt = 1e-5 s"])
+        table = parser.tables["tab-td_table1_table"]
+        self.assertEqual([r[0] for r in table], ["Semi-explicit", "Implicit"])
+        wall = {}
+        diverged = 0
+        for r in t1:
+            row = table[0] if r["summary.scheme"] == "semi_explicit" else table[1]
+            cell = row[hdr.index(f"M1x2, Δt = {r['time.dt']} s")]
+            if r["status"] == "diverged":
+                diverged += 1
+                t = float(r["diverged.time"])
+                self.assertEqual(cell, f"diverged at t = {fmt_g(t)} s")
+            else:
+                self.assertEqual(r["status"], "ok")
+                w, e = float(r["wall_seconds"]), float(r["energy_error_max"])
+                wall[(r["summary.scheme"], r["time.dt"])] = w
+                self.assertEqual(cell, f"{fmt_g(w)} s; energy error {fmt_g(100 * e, 2)} %")
+        self.assertGreaterEqual(diverged, 1)   # the semi-explicit scheme at 1e-4 s
+        self.assertIn('<td class="diverged"><b>diverged</b> at t =', section_html(page, "td_table1"))
+        ratio = parser.tables["tab-td_table1_ratio"]
+        self.assertEqual(len(ratio), 1)
+        for k, dt in enumerate(("1e-4", "1e-5")):
+            a, b = wall.get(("implicit", dt)), wall.get(("semi_explicit", dt))
+            self.assertEqual(ratio[0][k + 1], f"×{a / b:.1f}" if a and b else "–")
+        pen = [r for r in rows if r["group"] == "penalty"]
+        ptab = parser.tables["tab-td_table1_penalty"]
+        self.assertEqual([r[-1] for r in ptab], [r["run_id"] for r in pen])
+        self.assertEqual(ptab[0][1], f"{fmt_g(float(pen[0]['dt']), 4)} s")
+        with open(stab_file) as f:
+            st = json.load(f)
+        stab = parser.tables["tab-td_table1_stability"]
+        self.assertEqual([r[0] for r in stab], ["M1x2 semi-explicit"])
+        self.assertEqual(stab[0][2], f"{fmt_g(st['largest_stable_dt'], 4)} s")
+        cap = section_html(page, "td_table1")
+        cap = cap[cap.index("<figcaption>"):cap.index("</figcaption>")]
+        self.assertIn("single runs", cap)    # no --repeat
+        self.assertIn("three-dimensions.md#the-3d-table-1", cap)
+        self.assertIn("ricochet sweep cases/three_d/table1_fast.toml", cap)
 
     def test_tables_have_expected_rows(self):
         with open(os.path.join(self.out_full, "index.html")) as f:
@@ -967,14 +1050,22 @@ class ReportSmoke(unittest.TestCase):
         args = argparse.Namespace(accuracy=None, stability=None, verification=None,
                                   kim_kwak=None, kim_kwak_fields=None, envelope=None,
                                   long_runs=None, three_d=None, three_d_refinement=None,
-                                  three_d_fields=None, no_discover=False)
+                                  three_d_fields=None, three_d_table1=None,
+                                  three_d_stability=None, no_discover=False)
         src = make_report.generic_sources(Sweep(self.env), args)
         self.assertEqual(src[5:7], (os.path.abspath(self.env), None))
         src = make_report.generic_sources(Sweep(self.long), args)
         self.assertEqual(src[5:7], (None, os.path.abspath(self.long)))
-        self.assertEqual(src[7], (None, None, None))  # no 3D sources for the long runs
-        src = make_report.generic_sources(Sweep(self.td), args)  # the 3D sweep is its own source
-        self.assertEqual(src[7], (self.td, None, None))
+        self.assertEqual(src[7], (None,) * 5)  # no 3D sources for the long runs
+        # the 3D sweep is its own source; the 3D Table 1 and the stability folder beside it
+        src = make_report.generic_sources(Sweep(self.td), args)
+        t1, stab = os.path.abspath(self.td_t1), os.path.abspath(self.td_stab)
+        self.assertEqual(src[7], (os.path.abspath(self.td), None, None, t1, stab))
+        src = make_report.generic_sources(Sweep(self.td_t1), args)  # and so is the Table 1 sweep
+        self.assertEqual(src[7], (os.path.abspath(self.td), None, None, t1, stab))
+        args.no_discover = True
+        src = make_report.generic_sources(Sweep(self.td_t1), args)
+        self.assertEqual(src[7], (None, None, None, t1, None))
         rep = os.path.join(self.tmp, "alone_long")
         run([PY, SCRIPT, self.long, "--out", rep, "--max-run-plots", "1"])
         got = {s["id"]: s for s in self.manifest(rep)["sections"]}

@@ -66,9 +66,11 @@ const std::vector<Script>& scripts() {
         {"--three-d", "TD_DIR", "3D sweep folder (cases/three_d/sweep.toml)"},
         {"--three-d-refinement", "TDR_DIR", "3D refinement sweep folder (cases/three_d/refinement.toml)"},
         {"--three-d-fields", "FIELDS_DIR", "run folder of cases/three_d/oblique_block.toml with fields/*.vtu"},
+        {"--three-d-table1", "TDT1_DIR", "3D Table 1 sweep folder (cases/three_d/table1.toml or table1_fast.toml)"},
+        {"--three-d-stability", "TDS_DIR", "folder of ricochet stability results of the 3D meshes (subfolders with stability.json)"},
         {"--out", "OUT", "report folder (default DIR/report)"},
         {"--max-run-plots", "N", "draw the histories of at most N runs (default 30)"},
-        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/ and oblique_block/ next to DIR"},
+        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, oblique_block/, three_d_table1/ and three_d_stability/ next to DIR"},
         {"-h, --help", "", "the script's help"}}},
       {"plot", "plot_run.py",
        "one PNG of a run's history (docs/report.md): RUN_DIR/history.png; runs reports/plot_run.py "
