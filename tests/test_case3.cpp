@@ -139,7 +139,7 @@ TEST(Case3, TwoDKeysAndLimitsAreNamed) {
       {{"meshes.m.distort=0.1"}, {"meshes.m.distort", "allowed for \"box\": none"}},
       {{"meshes.m.extrude={thickness = 0.01}"}, {"meshes.m.extrude", "3D already"}},
       {{"meshes.n={generator = \"rectangle\", width = 1.0, height = 1.0}"}, {"meshes.n", "2D mesh", "3D throughout"}},
-      {{"contact_pairs=[{slave = \"b\", master = \"b\"}]"}, {"contact_pairs[0].slave", "2D only so far"}},
+      {{"contact_pairs=[{slave = \"b\", master = \"b\"}]"}, {"contact_pairs[0].master", "must differ from slave"}},
       {{"bodies[0].node_sets=[{name = \"s\", box = [0.0, 0.0, 1.0, 1.0]}]"}, {"node_sets[0].box", "zmin"}},
       {{"scene_rotation={axis = [0.0, 0.0, 0.0], angle = 10.0}"}, {"scene_rotation.axis", "non-zero"}},
       {{"obstacles[0].point=[0.0, 0.005, 0.0]"}, {"starts inside", "ground"}},

@@ -14,6 +14,7 @@
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/input/run_plan.hpp"
+#include "solver/contact/body_contact3.hpp"
 #include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/time_step.hpp"
 
@@ -356,9 +357,32 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
   }
 }
 
-// 3D: nodes inside a rigid obstacle (3D cases have no contact pairs yet).
+// 3D: nodes inside a rigid obstacle, and slave nodes inside their pair's master body (the
+// signed distance to its boundary faces, body_contact3.hpp; nodes outside the master's
+// bounding box are skipped).
 void check_initial_penetration(const CaseSpec& c, const Model3& model, const RunSettings& s) {
   check_obstacle_penetration(c, model, s.obstacles3);
+  const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
+  auto ref = [&](int j) -> Vec3 { return model.ref.col(j); };
+  for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
+    const BodyInfo3& slave = model.bodies[s.body_pairs[k].slave];
+    const BodyInfo3& master = model.bodies[s.body_pairs[k].master];
+    const double tol = 1e-9 * std::max(body_size(model, slave), body_size(model, master));
+    const Surface3 surf = make_surface3(model, s.body_pairs[k].master);
+    const BoxD<3> box = surface_box(surf, ref, 0.0);
+    int worst = -1;
+    double depth = tol;
+    for (int node : slave.boundary_nodes) {
+      if (!box.contains(model.ref.col(node))) continue;
+      const double d = depth_inside(model, surf, u0, model.ref.col(node));
+      if (d > depth) depth = d, worst = node;
+    }
+    if (worst >= 0)
+      throw InputError(c.file + ": body \"" + slave.name + "\" node " + std::to_string(worst - slave.first_node) +
+                       " at " + point_text(model.ref.col(worst)) + " starts inside body \"" + master.name +
+                       "\" of a contact pair, " + depth_text(depth) +
+                       " deep (the deepest node); move one of the bodies");
+  }
 }
 
 Material3 make_material3(const MaterialSpec& m) {

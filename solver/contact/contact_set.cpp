@@ -28,7 +28,7 @@ ContactSetT<M::kDim> make_contact_set(const M& model, const std::vector<Obstacle
     if constexpr (D == 2)
       c.surfaces.push_back(make_surface(model, bp.master));
     else
-      throw std::invalid_argument("body pair: contact between bodies is 2D only so far");
+      c.surfaces.push_back(make_surface3(model, bp.master));
     for (int node : model.bodies[bp.slave].boundary_nodes)
       if (!held[node]) {
         c.candidates.push_back({node, -1, bp.friction, q});
@@ -96,7 +96,7 @@ void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obsta
     double g = 0.0;
     if (cc.pair < 0)
       g = closest(obstacles[cc.obstacle], x).gap;
-    else if constexpr (D == 2)
+    else
       g = signed_distance(model, c.surfaces[cc.pair], u, x);
     const int code = c.status[k] == ContactStatus::stick  ? kNodeStick
                      : c.status[k] == ContactStatus::slip ? kNodeSlip
@@ -127,13 +127,11 @@ double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
       depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
       continue;
     }
-    if constexpr (D == 2) {
-      if (cc.pair != boxed) {
-        box = surface_box(surfaces.at(cc.pair), position, 0.0);
-        boxed = cc.pair;
-      }
-      if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
+    if (cc.pair != boxed) {
+      box = surface_box(surfaces.at(cc.pair), position, 0.0);
+      boxed = cc.pair;
     }
+    if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
   }
   return depth;
 }

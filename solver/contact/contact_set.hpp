@@ -51,10 +51,9 @@ struct Space<2> {
   using Surface = ricochet::Surface;
   using Box = Box2;
 };
-// The master surface of a 3D body pair: Surface3, its faces (body_contact3.hpp). The node-to-face
-// geometry is there; the schemes do not use it yet: make_contact_set rejects body pairs for a
-// Model3, so no Surface3 is made here, and the dimension-generic code reads its nodes and
-// max_length only (update_boxes, surface_box).
+// The master surface of a 3D body pair: Surface3, its faces (body_contact3.hpp), and the
+// node-to-face contact of find_face(): the stencil of a face contact is the slave node and the
+// face's corners (5 nodes for a quadrilateral, 4 for a triangle; 3 and 2 at an edge or vertex).
 template <>
 struct Space<3> {
   using Vec = Vec3;
@@ -174,7 +173,7 @@ struct ContactSetT {
   std::vector<typename Space<D>::Box> boxes;
   // Per candidate.
   std::vector<typename Space<D>::Stencil> stencil;          // the nodes its reaction acts on (rigid obstacles: the node alone)
-  std::vector<int> segment;              // master segment of the last step (-1 none)
+  std::vector<int> segment;              // master segment (3D: face) of the last step (-1 none)
   // The outward normal of the step's frame (ContactFrame<D>, contact_space.hpp), frozen for the
   // step: `reaction` is expressed in it.
   std::vector<Vec, Eigen::aligned_allocator<Vec>> normal;
@@ -223,8 +222,21 @@ template <class M, class Eval>
                      VecD<D>(model.ref.col(cc.node) + u_start.template segment<D>(D * cc.node)), eval(cc.node));
     return true;
   }
-  if constexpr (D != 2) {
-    return false;  // contact between bodies: 2D only so far (make_contact_set rejects pairs in 3D)
+  if constexpr (D == 3) {
+    // Node to face (body_contact3.hpp, find_face): the tracked face of the last step first.
+    const Surface3& surf = c.surfaces[cc.pair];
+    if (!c.boxes[cc.pair].contains(eval(cc.node))) {
+      c.segment[k] = -1;
+      return false;
+    }
+    auto start = [&](int j) -> Vec3 { return model.ref.col(j) + u_start.template segment<3>(3 * j); };
+    auto vel = [&](int j) -> Vec3 { return v_start.template segment<3>(3 * j); };
+    const NodeFace nf = find_face(surf, cc.node, c.segment[k], start, eval, vel);
+    c.segment[k] = nf.face;
+    if (nf.face < 0) return false;
+    c.stencil[k] = nf.stencil;
+    out = {nf.gap, nf.normal};
+    return true;
   } else {
     const Surface& surf = c.surfaces[cc.pair];
     if (!c.boxes[cc.pair].contains(eval(cc.node))) {

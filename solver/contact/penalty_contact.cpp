@@ -52,15 +52,19 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
 // A the face's reference area (a quadrilateral's |d13 x d24| / 2, exact for a flat face; a
 // triangle's |e1 x e2| / 2), V its cell's reference volume; each of the face's corners gets
 // k_s / corners. (2D is this with A = l e, V = A_c e.)
+double face_stiffness_per_scale(const Model3& model, const BoundaryFace& f, double bulk) {
+  auto x = [&](int a) -> Vec3 { return model.ref.col(f.nodes[a]); };
+  const Vec3 normal2 = f.corners == 4 ? Vec3((x(2) - x(0)).cross(x(3) - x(1))) : Vec3((x(1) - x(0)).cross(x(2) - x(0)));
+  const double area = 0.5 * normal2.norm();
+  return bulk * area * area / f.cell_volume;
+}
+
 std::vector<double> nodal_stiffness_per_scale(const Model3& model) {
   std::vector<double> k(model.num_nodes(), 0.0);
   for (const BodyInfo3& body : model.bodies) {
     const double bulk = penalty_bulk_modulus(body.material);
     for (const BoundaryFace& f : body.boundary_faces) {
-      auto x = [&](int a) -> Vec3 { return model.ref.col(f.nodes[a]); };
-      const Vec3 normal2 = f.corners == 4 ? Vec3((x(2) - x(0)).cross(x(3) - x(1))) : Vec3((x(1) - x(0)).cross(x(2) - x(0)));
-      const double area = 0.5 * normal2.norm();
-      const double ks = bulk * area * area / f.cell_volume;
+      const double ks = face_stiffness_per_scale(model, f, bulk);
       for (int a = 0; a < f.corners; ++a) k[f.nodes[a]] += ks / f.corners;
     }
   }
@@ -92,6 +96,20 @@ PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<
     const double bulk = penalty_bulk_modulus(master.material);
     for (const BoundaryEdge& e : master.boundary_edges) {
       const double ks = segment_stiffness_per_scale(model, master, e, bulk);
+      p.segment_stiffness[q].push_back(settings.scale_factor * ks);
+      k_max[q] = std::max(k_max[q], ks);
+    }
+    m_master[q] = std::numeric_limits<double>::infinity();
+    for (int j : c.surfaces[q].nodes) m_master[q] = std::min(m_master[q], model.mass[D * j]);
+  }
+  // 3D: per master face (Surface3::faces are the master's boundary faces, in order) its
+  // k_s = f_si K A^2 / V, the face the slave node meets playing the 2D segment's part.
+  if constexpr (D == 3)
+  for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
+    const BodyInfo3& master = model.bodies[c.surfaces[q].body];
+    const double bulk = penalty_bulk_modulus(master.material);
+    for (const BoundaryFace& f : master.boundary_faces) {
+      const double ks = face_stiffness_per_scale(model, f, bulk);
       p.segment_stiffness[q].push_back(settings.scale_factor * ks);
       k_max[q] = std::max(k_max[q], ks);
     }

@@ -282,12 +282,8 @@ bool ImplicitIntegratorT<M>::engage_penetrating() {
     if (engaged_[k]) continue;
     const ContactCandidate& cc = contact_.candidates[k];
     const Vec x = model_.ref.col(cc.node) + u1_.template segment<D>(D * cc.node);
-    bool inside;
-    if constexpr (D == 2)
-      inside = cc.pair < 0 ? closest(obstacles_[cc.obstacle], x).gap < 0.0
-                           : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
-    else
-      inside = cc.pair < 0 && closest(obstacles_[cc.obstacle], x).gap < 0.0;  // no body pairs in 3D yet
+    const bool inside = cc.pair < 0 ? closest(obstacles_[cc.obstacle], x).gap < 0.0
+                                    : depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
     if (inside) {
       engaged_[k] = 1;
       any = true;
