@@ -43,7 +43,8 @@ const char* name(Scheme s) {
 RunResult run(const Model3& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
-    const PenaltyContactT<3> p = make_penalty_contact(model, s.obstacles3, s.friction, s.prescribed, s.penalty, s.body_pairs);
+    const PenaltyContactT<3> p =
+        make_penalty_contact(model, s.obstacles3, s.friction, s.prescribed, s.penalty, s.body_pairs);
     s.dt = std::min(s.dt, penalty_stable_time_step(model, p, 0.9));
   }
   if (scheme == Scheme::implicit) return run_implicit(model, s, ImplicitSettings{});
@@ -129,7 +130,8 @@ TEST(BodyContact3Schemes, HeadOnBarsConserveMomentumAndFollowThe1DSolution) {
   for (const Config& cf : {Config{Scheme::semi_explicit, false, false}, Config{Scheme::penalty, false, false},
                            Config{Scheme::implicit, false, false}, Config{Scheme::semi_explicit, true, false},
                            Config{Scheme::semi_explicit, false, true}, Config{Scheme::implicit, true, false}}) {
-    const std::string label = std::string(name(cf.scheme)) + (cf.tets ? " tet4" : " hex8") + (cf.two_pass ? " two-pass" : "");
+    const std::string label =
+        std::string(name(cf.scheme)) + (cf.tets ? " tet4" : " hex8") + (cf.two_pass ? " two-pass" : "");
     SCOPED_TRACE(label);
     HeadOn3 h(cf.tets);
     if (cf.two_pass) h.settings.body_pairs.push_back({1, 0, 0.0, "pair"});
@@ -207,12 +209,13 @@ TEST(BodyContact3Schemes, ObliqueFrictionalImpactConservesMomentum) {
       EXPECT_GE(r.contact_steps, 5);
       EXPECT_GT(r.contact_impulse_normal, 0.0);
       EXPECT_LE(r.contact_impulse_tangential, mu * r.contact_impulse_normal * (1.0 + 1e-9));
-      // The block comes in at |v_n| = 1 m/s and slides (|v_t| = 2.06 > mu x 2 |v_n| at any
-      // rebound): it slides throughout, the tangential impulse at the cone's bound.
+      // The block comes in at |v_n| = 1 m/s with |v_t| = 2.06 m/s: a normal impulse of at most
+      // 2 m |v_n| (an elastic rebound) allows a tangential one of 0.6 m, which cannot stop the
+      // slip. It slides throughout, the tangential impulse at the cone's bound.
       EXPECT_GT(r.contact_impulse_tangential, 0.9 * mu * r.contact_impulse_normal);
       // The frame (face, (xi, eta), normal) is frozen over a step while the corner node slides
-      // tens of micrometres a step over a face that turns: the gap enforced is that of the frozen frame,
-      // and the node ends up to ~1e-9 m (1e-7 of the 1 cm cells) inside the master.
+      // tens of micrometres a step over a face that turns: the gap enforced is that of the
+      // frozen frame, and the node ends up to ~1e-9 m (1e-7 of the 1 cm cells) inside the master.
       if (scheme != Scheme::penalty) EXPECT_LT(r.penetration_max, 1e-8);
     }
   }

@@ -1,7 +1,8 @@
 // Contact between deformable bodies in 3D: node to face, the geometry (docs/three-dimensions.md,
 // Contact between bodies in 3D: node to face). The 3D counterpart of body_contact.hpp's node to
 // segment: the master's surface, the projection of a point onto a face, the face choice for a
-// slave node and the depth of a point inside the master. No scheme uses it yet.
+// slave node and the depth of a point inside the master. The contact set (contact_set.hpp) uses it
+// for the body pairs of a Model3, in all three schemes.
 //
 // The master's surface is its boundary faces (BodyInfo3::boundary_faces): quadrilaterals of
 // hexahedra and triangles of tetrahedra, their corners counter-clockwise seen from outside the

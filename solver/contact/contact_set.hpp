@@ -206,9 +206,9 @@ void update_boxes(ContactSetT<D>& c, const Eval& eval) {
 
 // Candidate k's gap and frame for the step, with its stencil: for a rigid obstacle the
 // step_frame() of the node from its start position X + u_start to eval(node); for a body pair
-// the segment choice of body_contact.hpp (start positions X + u_start, velocities v_start,
-// evaluation positions eval(j)). Returns false (and clears the tracked segment) when a pair's
-// node faces no master segment. Inlined into each scheme's contact loop (its one call site
+// the segment choice of body_contact.hpp, in 3D the face choice of body_contact3.hpp (start
+// positions X + u_start, velocities v_start, evaluation positions eval(j)). Returns false (and
+// clears the tracked segment or face) when a pair's node faces no master segment or face. Inlined into each scheme's contact loop (its one call site
 // there): out of line, as GCC left it once it was a template on the model type, the
 // semi-explicit contact phase took 26 % more instructions (callgrind).
 template <class M, class Eval>
@@ -342,19 +342,19 @@ enum NodeContactStatus : int {
   kNodeSlip = 3,         // at least one of its contacts slips (frictionless contacts slip)
 };
 // Fills, for every node i of the model (n = model.num_nodes()):
-//   force[2i], force[2i + 1]  the sum of the contact reactions acting on node i, in global axes
+//   force[Di .. Di + D - 1]   the sum of the contact reactions acting on node i, in global axes
 //                             [N]: over every closed contact (status stick or slip, the ones
 //                             record() sums into normal_force), coef_j (r_n n + r_t t) for each
 //                             node j of its stencil, so a body pair's master nodes get their
-//                             share -(1 - xi) r, -xi r;
+//                             share -(1 - xi) r, -xi r (3D: a face's corners -N_a r);
 //   gap[i]                    the smallest signed gap of node i over its candidates at the
 //                             positions X + u [m]: closest() for a rigid obstacle, the signed
-//                             distance to the master body (signed_distance(), body_contact.hpp)
-//                             for a pair; negative inside. 0 for a node that is no candidate;
+//                             distance to the master body (signed_distance(), body_contact.hpp,
+//                             body_contact3.hpp) for a pair; negative inside. 0 for a node that is no candidate;
 //   status[i]                 its NodeContactStatus, the strongest over its candidates' statuses.
 // The reactions, normals, stencils and statuses are those of the set's last step, read as they
 // are (whatever step the scheme last recorded). Allocates nothing; O(candidates) plus, for body
-// pairs, O(candidates x master segments).
+// pairs, O(candidates x master segments (faces)).
 template <class M>
 void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                          const ContactSetT<M::kDim>& c, const Eigen::VectorXd& u, double* force, double* gap,

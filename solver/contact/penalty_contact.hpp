@@ -99,6 +99,10 @@ double penalty_bulk_modulus(const Material3& material);
 // default PENO = 1: the minimum of the slave node's and the master segment's stiffness); the
 // force -k g n acts on the slave node and, with weights -(1 - xi) and -xi, on the segment's
 // nodes. `stiffness` holds f_si min(k_i, largest k_s of the master), which sets the step.
+// In 3D the master face plays the segment's part: k_s = K A^2 / V of the face the node meets
+// (LS-DYNA's solid-segment stiffness, A the face's reference area, V its cell's volume), also at
+// an edge or vertex of that face; the force acts on the slave node and, with weights -N_a, on
+// the face's corners (body_contact3.hpp).
 template <class M>
 PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                                     const std::vector<std::vector<double>>& friction,
