@@ -295,7 +295,8 @@ EIGEN_ALWAYS_INLINE void mean_gradient(const double* c, B bh, double* h) {
 }
 
 // One point: F = I + u B from the nodal displacements u(i, a) and the geometry
-// (Hex8OnePointLanes): f[3 i + J]; H = u B itself in h[3 i + J].
+// (Hex8OnePointLanes): f[3 i + J]; H = u B itself in h[3 i + J] (h = nullptr: not kept, as the
+// viscous form, whose hourglass modes take v B instead).
 template <class X, class Gm, class H, class F>
 EIGEN_ALWAYS_INLINE void one_point_gradient(const X& u, Gm geom, H h, F f) {
   double c[24], hl[9];
@@ -303,7 +304,7 @@ EIGEN_ALWAYS_INLINE void one_point_gradient(const X& u, Gm geom, H h, F f) {
   mean_gradient(c, geom, hl);
   RICOCHET_UNROLL
   for (int n = 0; n < 9; ++n) {
-    h[n] = hl[n];
+    if constexpr (!std::is_same_v<H, std::nullptr_t>) h[n] = hl[n];
     f[n] = (n % 4 == 0 ? 1.0 : 0.0) + hl[n];
   }
 }
@@ -454,9 +455,9 @@ inline Nodes3<N> gather3(const double* a, const std::array<int, N>& c) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Where a kernel puts each cell's nodal forces: added into the global array f (DirectScatter3),
-// or stored at the cell's place in a buffer of 3N values per cell (ElementStore3: the threaded
-// pass). The forces come as lane l of a batch's record.
+// Where a kernel puts a batch's nodal forces (the record fe, lanes 0 <= l < n are the cells e,
+// e + 1, ...): added into the global array f cell by cell (DirectScatter3), or stored whole in
+// the threaded pass's buffer (ElementStore3).
 namespace lanes3 {
 
 template <int N>
@@ -474,6 +475,26 @@ EIGEN_ALWAYS_INLINE void gather(const double* a, const int* conn, Nodes<N>& n) {
       n.v[0][i][l] = a[3 * c];
       n.v[1][i][l] = a[3 * c + 1];
       n.v[2][i][l] = a[3 * c + 2];
+    }
+}
+
+// gather() of two fields at the same nodes (the viscous one-point hexahedron's u and v) in one
+// loop: GCC emulates the gathers with scalar loads, and reads each node index out of the vector
+// of indices into a register; here it does so once for both fields, not once per field (7 % of
+// the viscous kernel's instructions).
+template <int N>
+EIGEN_ALWAYS_INLINE void gather2(const double* a, const double* b, const int* conn, Nodes<N>& na, Nodes<N>& nb) {
+  RICOCHET_UNROLL
+  for (int i = 0; i < N; ++i)
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l) {
+      const int c = conn[i * kLanes + l];
+      na.v[0][i][l] = a[3 * c];
+      na.v[1][i][l] = a[3 * c + 1];
+      na.v[2][i][l] = a[3 * c + 2];
+      nb.v[0][i][l] = b[3 * c];
+      nb.v[1][i][l] = b[3 * c + 1];
+      nb.v[2][i][l] = b[3 * c + 2];
     }
 }
 
@@ -495,40 +516,63 @@ EIGEN_ALWAYS_INLINE bool any(const double* x, int n) {
 struct DirectScatter3 {
   double* f;
   template <int N>
-  EIGEN_ALWAYS_INLINE void put(std::size_t, const std::array<int, N>& c, const lanes3::Nodes<N>& fe, int l) const {
-    RICOCHET_UNROLL
-    for (int a = 0; a < N; ++a) {
-      double* p = f + 3 * c[a];
-      p[0] += fe.v[0][a][l];
-      p[1] += fe.v[1][a][l];
-      p[2] += fe.v[2][a][l];
+  EIGEN_ALWAYS_INLINE void put(std::size_t e, const std::array<int, N>* conn, const lanes3::Nodes<N>& fe,
+                               int n) const {
+    for (int l = 0; l < n; ++l) {
+      RICOCHET_UNROLL
+      for (int a = 0; a < N; ++a) {
+        double* p = f + 3 * conn[e + l][a];
+        p[0] += fe.v[0][a][l];
+        p[1] += fe.v[1][a][l];
+        p[2] += fe.v[2][a][l];
+      }
     }
   }
 };
+// The buffer holds a block's batches whole (make_force_scratch pads a block to whole batches):
+// per batch 3N rows of kLanes values, row 3 a + k for component k of node a, lane l in column
+// l. So a batch goes out as 3N row copies (vector loads and stores), where one value per cell
+// and entry went out before; cell e's node a, component k is at 3N (e - e % kLanes) +
+// (3 a + k) kLanes + e % kLanes (ElementStore3::entry).
 struct ElementStore3 {
-  double* out;  // this block's first cell's entries
+  double* out;  // this block's first batch
   template <int N>
-  EIGEN_ALWAYS_INLINE void put(std::size_t e, const std::array<int, N>&, const lanes3::Nodes<N>& fe, int l) const {
-    double* o = out + 3 * N * e;
+  static constexpr std::size_t entry(std::size_t e, int a) {
+    return 3 * N * (e - e % kLanes) + 3 * a * kLanes + e % kLanes;
+  }
+  template <int N>
+  EIGEN_ALWAYS_INLINE void put(std::size_t e, const std::array<int, N>*, const lanes3::Nodes<N>& fe, int) const {
+    double* o = out + 3 * N * e;  // e: the batch's first cell, a multiple of kLanes
     RICOCHET_UNROLL
-    for (int a = 0; a < N; ++a) {
-      o[3 * a] = fe.v[0][a][l];
-      o[3 * a + 1] = fe.v[1][a][l];
-      o[3 * a + 2] = fe.v[2][a][l];
-    }
+    for (int a = 0; a < N; ++a)
+      RICOCHET_UNROLL
+      for (int k = 0; k < 3; ++k)
+#pragma omp simd
+        for (int l = 0; l < kLanes; ++l) o[(3 * a + k) * kLanes + l] = fe.v[k][a][l];
   }
 };
+
+// A batch row is kLanes = 8 doubles, one 512-bit vector. Where the target has AVX-512
+// (-march=native on such a machine), the kernels ask GCC for 512-bit vectors, one instruction a
+// row where its default (256-bit, for the clock of older AVX-512 cores) takes two; the arithmetic
+// of each lane is the same. Elsewhere it is empty.
+#if defined(__AVX512F__) && defined(__GNUC__) && !defined(__clang__)
+#define RICOCHET_KERNEL_VECTORS gnu::target("prefer-vector-width=512")
+#else
+#define RICOCHET_KERNEL_VECTORS
+#endif
 
 // ---------------------------------------------------------------------------------------------
 // The kernels: force_kernel<kViscous>(block, material, u, v, out, pass, t, e0, e1) puts f_int(u,
 // v) of the block's cells e0 <= e < e1 (all by default; e0 a multiple of kLanes) through `out`
-// and adds their totals into t. A last partial batch computes its padding lanes and drops them.
+// and adds their totals into t. A last partial batch computes its padding lanes; DirectScatter3
+// drops them, ElementStore3 stores them in the block's padding.
 
 // Tetrahedron: element3d.hpp's tet4_forces on lanes.
 template <bool kViscous, class Pass, class Mat, class Out>
-[[gnu::noinline, gnu::flatten]] void force_kernel(const Tet4Block& b, const Mat& material, const double* u,
-                                                  const double*, const Out& out, const Pass& pass_in,
-                                                  ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
+[[gnu::noinline, gnu::flatten, RICOCHET_KERNEL_VECTORS]] void force_kernel(
+    const Tet4Block& b, const Mat& material, const double* u, const double*, const Out& out, const Pass& pass_in,
+    ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
   const Mat mat = material;  // a local copy: its constants cannot alias f (element_kernels.hpp)
   Pass pass = pass_in;
   double energy = 0.0;
@@ -555,11 +599,11 @@ template <bool kViscous, class Pass, class Mat, class Out>
     if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
     const double* vol = g + Tet4Lanes::kVol * kLanes;
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
+    out.template put<4>(e, b.conn.data(), fe, n);
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may, kLanes));
     for (int l = 0; l < n; ++l) {
       const std::size_t c = e + l;
       const int cell = b.first_cell + static_cast<int>(c);
-      out.template put<4>(c, b.conn[c], fe, l);
       if constexpr (Pass::kEnergy) energy += vol[l] * mat.energy_density(F.lane(l));
       if (per_point) {
         pass.begin_element();
@@ -577,9 +621,9 @@ template <bool kViscous, class Pass, class Mat, class Out>
 
 // Hexahedron, 2x2x2 points.
 template <bool kViscous, class Pass, class Mat, class Out>
-[[gnu::noinline, gnu::flatten]] void force_kernel(const Hex8Block& b, const Mat& material, const double* u,
-                                                  const double*, const Out& out, const Pass& pass_in,
-                                                  ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
+[[gnu::noinline, gnu::flatten, RICOCHET_KERNEL_VECTORS]] void force_kernel(
+    const Hex8Block& b, const Mat& material, const double* u, const double*, const Out& out, const Pass& pass_in,
+    ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
   const Mat mat = material;  // see above
   Pass pass = pass_in;
   double energy = 0.0;
@@ -616,11 +660,11 @@ template <bool kViscous, class Pass, class Mat, class Out>
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) hex8wh::reference_forces(hex8wh::lane_in(&gq[0][l]), hex8wh::lane_out(&fe.v[0][0][l]));
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
+    out.template put<8>(e, b.conn.data(), fe, n);
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may[0], 8 * kLanes));
     for (int l = 0; l < n; ++l) {
       const std::size_t c = e + l;
       const int cell = b.first_cell + static_cast<int>(c);
-      out.template put<8>(c, b.conn[c], fe, l);
       if constexpr (Pass::kEnergy)
         for (int q = 0; q < 8; ++q) energy += g[Hex8Lanes::vol(q) * kLanes + l] * mat.energy_density(F[q].lane(l));
       if (per_point) {
@@ -640,9 +684,9 @@ template <bool kViscous, class Pass, class Mat, class Out>
 
 // One-point hexahedron with Flanagan-Belytschko hourglass control (see the top of the file).
 template <bool kViscous, class Pass, class Mat, class Out>
-[[gnu::noinline, gnu::flatten]] void force_kernel(const Hex8OnePointBlock& b, const Mat& material, const double* u,
-                                                  const double* v, const Out& out, const Pass& pass_in,
-                                                  ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
+[[gnu::noinline, gnu::flatten, RICOCHET_KERNEL_VECTORS]] void force_kernel(
+    const Hex8OnePointBlock& b, const Mat& material, const double* u, const double* v, const Out& out,
+    const Pass& pass_in, ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
   using L = Hex8OnePointLanes;
   const Mat mat = material;  // see above
   Pass pass = pass_in;
@@ -658,12 +702,19 @@ template <bool kViscous, class Pass, class Mat, class Out>
     const double* g = b.batch_geom(e / kLanes);
     const int* conn = b.batch_conn(e / kLanes);
     lanes3::Nodes<8> ue, ve, fe;
-    lanes3::gather<8>(u, conn, ue);
-    if constexpr (kViscous) lanes3::gather<8>(v, conn, ve);
+    if constexpr (kViscous)
+      lanes3::gather2<8>(u, v, conn, ue, ve);
+    else
+      lanes3::gather<8>(u, conn, ue);
 #pragma omp simd
-    for (int l = 0; l < kLanes; ++l)
-      hex8wh::one_point_gradient(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_in(g + l),
-                                 hex8wh::lane_out(&hu[0][l]), hex8wh::lane_out(&F.m[0][l]));
+    for (int l = 0; l < kLanes; ++l) {
+      if constexpr (kViscous)
+        hex8wh::one_point_gradient(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_in(g + l), nullptr,
+                                   hex8wh::lane_out(&F.m[0][l]));
+      else
+        hex8wh::one_point_gradient(hex8wh::StridedNodes<8, kLanes>{&ue.v[0][0][l]}, hex8wh::lane_in(g + l),
+                                   hex8wh::lane_out(&hu[0][l]), hex8wh::lane_out(&F.m[0][l]));
+    }
     determinant_lanes(F, det);
     first_piola_lanes(mat, F, P);
 #pragma omp simd
@@ -674,11 +725,11 @@ template <bool kViscous, class Pass, class Mat, class Out>
     lanes3::min_into(min_j, det);
     if constexpr (Pass::kPerPoint) pass.screen(mat, F, P, det, may);
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - e));
+    out.template put<8>(e, b.conn.data(), fe, n);
     const bool per_point = Pass::kPerPoint && (Pass::kEveryPoint || lanes3::any(may, kLanes));
     for (int l = 0; l < n; ++l) {
       const std::size_t c = e + l;
       const int cell = b.first_cell + static_cast<int>(c);
-      out.template put<8>(c, b.conn[c], fe, l);
       if constexpr (kViscous)
         hg_power += work[l];
       else if constexpr (Pass::kEnergy)

@@ -101,29 +101,34 @@ void all_blocks(const Model3& model, const double* u, const double* v, double* f
   const long chunks = static_cast<long>(x.chunks.size());
   const int nodes = model.num_nodes();
   const ForceTotals start = t;  // every chunk starts from the pass's initial totals
-  auto chunk = [&](long c) {
+  // Chunk c's cells, their totals from `start` into x.totals[c], their forces through `out`.
+  auto chunk_into = [&](long c, const auto& out) {
     const ForceScratch::Chunk& k = x.chunks[c];
     ForceTotals& tc = x.totals[c];
     tc = start;
     visit_block(model, static_cast<BlockKind3>(k.kind), k.block, [&](const auto& b, const auto& mat, auto viscous) {
-      force_kernel<decltype(viscous)::value>(b, mat, u, v, ElementStore3{x.element_forces.data() + k.out},
-                                             Pass(cc, tc), tc, k.begin, k.end);
+      force_kernel<decltype(viscous)::value>(b, mat, u, v, out, Pass(cc, tc), tc, k.begin, k.end);
     });
   };
-  // Each node sums its cells' forces in the serial scatter's order, from 0 as f_int starts.
+  auto chunk = [&](long c) { chunk_into(c, ElementStore3{x.element_forces.data() + x.chunks[c].out}); };
+  // Each node sums its cells' forces in the serial scatter's order, from 0 as f_int starts (an
+  // entry's y and z are a row and two rows after its x: ElementStore3).
   auto gather = [&](int i) {
     double fx = 0.0, fy = 0.0, fz = 0.0;
     for (int p = x.node_offsets[i]; p < x.node_offsets[i + 1]; ++p) {
       const double* e = x.element_forces.data() + x.entries[p];
       fx += e[0];
-      fy += e[1];
-      fz += e[2];
+      fy += e[kLanes];
+      fz += e[2 * kLanes];
     }
     f[3 * i] = fx;
     f[3 * i + 1] = fy;
     f[3 * i + 2] = fz;
   };
-  // As in 2D: no parallel region for a small model or one thread.
+  // As in 2D: no parallel region for a small model or one thread. On one thread the chunks add
+  // their cells' forces straight into f instead (DirectScatter3), cell by cell in the order the
+  // nodes' sums take them, so f is bit for bit the gathered one, and the totals still sum by
+  // chunk; the store and the gather were a fifth of a step of the one-point hexahedron.
   if (x.chunks.size() >= kForceParallelChunks && omp_get_max_threads() > 1) {
 #pragma omp parallel
     {
@@ -133,8 +138,8 @@ void all_blocks(const Model3& model, const double* u, const double* v, double* f
       for (int i = 0; i < nodes; ++i) gather(i);
     }
   } else {
-    for (long c = 0; c < chunks; ++c) chunk(c);
-    for (int i = 0; i < nodes; ++i) gather(i);
+    std::fill(f, f + model.num_dofs(), 0.0);
+    for (long c = 0; c < chunks; ++c) chunk_into(c, DirectScatter3{f});
   }
   // The chunks' totals in chunk order; of equal peaks the first cell wins, as in the serial pass.
   for (const ForceTotals& c : x.totals) {
@@ -195,8 +200,9 @@ ForceScratch make_force_scratch(const Model3& model) {
         for (std::size_t e0 = 0; e0 < b.conn.size(); e0 += kForceChunkCells)
           x.chunks.push_back({static_cast<int>(kind), k, e0, std::min(b.conn.size(), e0 + kForceChunkCells), out});
         for (std::size_t e = 0; e < b.conn.size(); ++e)
-          for (int i = 0; i < N; ++i) node_entries[b.conn[e][i]].push_back(static_cast<int>(out + 3 * N * e + 3 * i));
-        out += 3 * N * b.conn.size();
+          for (int i = 0; i < N; ++i)
+            node_entries[b.conn[e][i]].push_back(static_cast<int>(out + ElementStore3::entry<N>(e, i)));
+        out += 3 * N * kLanes * b.num_batches();  // whole batches, the last one's padding too
       });
   if (out > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw std::length_error("make_force_scratch: too many element-force entries for int indices");

@@ -18,7 +18,8 @@ namespace ricochet {
 
 // The threaded pass's workspace for a Model3 (ForceScratch, the 2D type: one State serves both
 // dimensions): chunks of kForceChunkCells cells of the blocks in for_each_block's order, 3N
-// element-force values per cell.
+// element-force values per cell, a block's in whole batches of kLanes cells in the lane layout of
+// element_kernels3.hpp's ElementStore3 (an entry's y and z values kLanes and 2 kLanes after its x).
 ForceScratch make_force_scratch(const Model3& model);
 
 // Overwrites f_int (3n). `v` (3n) is the velocity the viscous hourglass forces use. As the 2D
