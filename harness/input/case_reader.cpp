@@ -41,7 +41,7 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
         t.fail(key, "applies to generated meshes only (generator = \"rectangle\", \"arc_plate\", \"disk\"), "
                     "not to a mesh file");
   } else {
-    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk", "box"});
+    const std::string gen = t.choice("generator", "", {"rectangle", "arc_plate", "disk", "box", "ball"});
     if (gen == "box") {
       BoxSpec b;
       b.size = t.vec("size", 3);
@@ -57,6 +57,16 @@ MeshSpec read_mesh(const TableReader& t, const std::string& name, const std::fil
       if (t.has("distort"))
         t.fail("distort", "applies to the 2D generators (\"rectangle\", \"arc_plate\", \"disk\", also when "
                           "extruded); allowed for \"box\": none");
+    } else if (gen == "ball") {
+      BallSpec b;
+      b.radius = t.number("radius", Range::positive());
+      b.center = t.vec("center", 3, Vec3::Zero());
+      b.n = static_cast<int>(t.integer("n", 8, 1, kMaxDivisions));
+      m.source = b;
+      m.dimension = 3;
+      if (t.has("distort"))
+        t.fail("distort", "applies to the 2D generators (\"rectangle\", \"arc_plate\", \"disk\", also when "
+                          "extruded); allowed for \"ball\": none");
     } else if (gen == "rectangle") {
       RectangleSpec r;
       r.width = t.number("width", Range::positive());

@@ -78,7 +78,7 @@ Mesh build_mesh(const CaseSpec& c, const MeshSpec& m) {
   return mesh;
 }
 
-// A 3D mesh: the box generator, a 3D Gmsh file, or a 2D source extruded; then
+// A 3D mesh: the box or ball generator, a 3D Gmsh file, or a 2D source extruded; then
 // x' = R (s x - c) + c + offset with R the rotation by `rotate` degrees about rotate_axis
 // (right-handed), c = rotate_about.
 Mesh3 build_mesh3(const CaseSpec& c, const MeshSpec& m) {
@@ -86,6 +86,8 @@ Mesh3 build_mesh3(const CaseSpec& c, const MeshSpec& m) {
   try {
     if (const auto* b = std::get_if<BoxSpec>(&m.source))
       mesh = make_box(*b);
+    else if (const auto* ball = std::get_if<BallSpec>(&m.source))
+      mesh = make_ball(*ball);
     else if (const auto* g = std::get_if<GmshFile>(&m.source); g && !m.extrude)
       mesh = read_gmsh3(g->path);
   } catch (const InputError& e) {

@@ -48,8 +48,9 @@ struct ExtrusionSpec {
 
 struct MeshSpec {
   std::string name;
-  // BoxSpec: the 3D `generator = "box"`; a GmshFile holds 2D or 3D cells (`dimension`).
-  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile, BoxSpec> source;
+  // BoxSpec, BallSpec: the 3D `generator = "box"`, `"ball"`; a GmshFile holds 2D or 3D cells
+  // (`dimension`).
+  std::variant<RectangleSpec, ArcPlateSpec, DiskSpec, GmshFile, BoxSpec, BallSpec> source;
   std::optional<ExtrusionSpec> extrude;  // a 2D source made 3D
   int dimension = 2;             // of the mesh this builds: 3 for a box, an extrusion or a 3D Gmsh file
   double distort = 0.0;          // generated 2D meshes: interior nodes moved by up to this x h [-]

@@ -1,6 +1,8 @@
 #include "harness/input/mesh_generators3.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <string>
 
 #include "harness/input/generator_checks.hpp"
@@ -89,6 +91,124 @@ Mesh3 make_box(const BoxSpec& spec) {
         if (i == 0 || i == nx || j == 0 || j == ny || k == 0 || k == nz) sets["boundary"].push_back(p);
       }
   set_all(mesh);
+  return mesh;
+}
+
+Mesh3 make_ball(const BallSpec& spec) {
+  require_positive("ball", "radius", spec.radius);
+  if (!spec.center.allFinite())
+    fail("ball: center must be finite (got " + str(spec.center.x()) + ", " + str(spec.center.y()) + ", " +
+         str(spec.center.z()) + ")");
+  if (spec.n < 1) fail("ball: n must be >= 1 (got " + std::to_string(spec.n) + ")");
+  const long long n_ll = spec.n, nr_ll = (n_ll + 1) / 2;
+  // (n+1)^3 overflows 64 bits for n near 2^31: bound n first (max_nodes^(1/3) < 500).
+  if (n_ll > 1000 || (n_ll + 1) * (n_ll + 1) * (n_ll + 1) + nr_ll * (6 * n_ll * n_ll + 2) > max_nodes)
+    fail("ball: (n+1)^3 + ceil(n/2) (6 n^2 + 2) must be <= " + std::to_string(max_nodes) + " nodes (got n " +
+         std::to_string(spec.n) + ")");
+
+  // The core: half-width a = core R, bulged by `bulge` towards the sphere through its corners
+  // (the header gives the geometry).
+  constexpr double core = 0.4, bulge = 0.3;
+  const int n = spec.n, nr = (n + 1) / 2, n1 = n + 1;
+  const double R = spec.radius, a = core * R, sqrt3 = std::numbers::sqrt3;
+  const auto lattice = [n](int i) { return static_cast<double>(2 * i - n) / n; };  // -1 .. 1, odd in i
+  // tan(pi q / 4), exactly +-1 at the faces and odd in q.
+  const auto tan4 = [](double q) { return q == 1.0 ? 1.0 : q == -1.0 ? -1.0 : std::tan(0.25 * std::numbers::pi * q); };
+  const auto dir = [&](const Vec3& q) { return Vec3(tan4(q.x()), tan4(q.y()), tan4(q.z())).normalized(); };
+  const auto bulged = [&](const Vec3& q) -> Vec3 { return a * ((1.0 - bulge) * q + bulge * sqrt3 * dir(q)); };
+
+  // Node numbering: the core's lattice (i, j, k) first, i fastest; then layer by layer the
+  // surface lattice points in the lattice's order.
+  const auto core_id = [n1](int i, int j, int k) { return (k * n1 + j) * n1 + i; };
+  const int core_nodes = n1 * n1 * n1;
+  std::vector<int> surface(static_cast<std::size_t>(core_nodes), -1);
+  int surface_nodes = 0;
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        if (i == 0 || i == n || j == 0 || j == n || k == 0 || k == n)
+          surface[static_cast<std::size_t>(core_id(i, j, k))] = surface_nodes++;
+  // Node of lattice point (i, j, k) at layer l (0 = the core).
+  const auto id = [&](int l, int i, int j, int k) {
+    return l == 0 ? core_id(i, j, k) : core_nodes + (l - 1) * surface_nodes + surface[static_cast<std::size_t>(core_id(i, j, k))];
+  };
+
+  Mesh3 mesh;
+  mesh.nodes.resize(3, core_nodes + nr * surface_nodes);
+  const double r_mid = a * ((1.0 - bulge) + bulge * sqrt3);  // centre to the core's face centre
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const Vec3 xi(lattice(i), lattice(j), lattice(k));
+        const double m = xi.cwiseAbs().maxCoeff();
+        const Vec3 x = m == 0.0 ? Vec3::Zero() : Vec3(m * bulged(xi / m));
+        mesh.nodes.col(core_id(i, j, k)) = x;
+        if (m != 1.0) continue;
+        const Vec3 outer = R * dir(xi);
+        for (int l = 1; l <= nr; ++l) {
+          const double t = std::expm1(std::log(R / r_mid) * l / nr) / (R / r_mid - 1.0);
+          mesh.nodes.col(id(l, i, j, k)) = l == nr ? outer : Vec3(x + t * (outer - x));
+        }
+      }
+  mesh.nodes.colwise() += spec.center;
+
+  // Cells: the core's, then each face's block, layer by layer. A block cell's corners 0-3 are
+  // its face cell at layer l - 1, 4-7 the same at layer l; the order is flipped where that
+  // gives a negative volume (on the faces at the lattice's low side).
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        mesh.hexes.push_back({core_id(i, j, k), core_id(i + 1, j, k), core_id(i + 1, j + 1, k), core_id(i, j + 1, k),
+                              core_id(i, j, k + 1), core_id(i + 1, j, k + 1), core_id(i + 1, j + 1, k + 1),
+                              core_id(i, j + 1, k + 1)});
+  for (int axis = 0; axis < 3; ++axis)
+    for (const int side : {0, n}) {
+      const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+      for (int v = 0; v < n; ++v)
+        for (int u = 0; u < n; ++u) {
+          const int du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+          std::array<std::array<int, 3>, 4> p{};
+          for (int r = 0; r < 4; ++r) {
+            p[static_cast<std::size_t>(r)][static_cast<std::size_t>(axis)] = side;
+            p[static_cast<std::size_t>(r)][static_cast<std::size_t>(b)] = u + du[r];
+            p[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] = v + dv[r];
+          }
+          for (int l = 1; l <= nr; ++l) {
+            std::array<int, 8> h{};
+            for (int r = 0; r < 4; ++r) {
+              const auto& pr = p[static_cast<std::size_t>(r)];
+              h[static_cast<std::size_t>(r)] = id(l - 1, pr[0], pr[1], pr[2]);
+              h[static_cast<std::size_t>(r + 4)] = id(l, pr[0], pr[1], pr[2]);
+            }
+            // (x1 - x0) x (x3 - x0) points along +axis: into the cell on the high side only.
+            if (side == 0) h = {h[0], h[3], h[2], h[1], h[4], h[7], h[6], h[5]};
+            mesh.hexes.push_back(h);
+          }
+        }
+    }
+
+  auto& sets = mesh.node_sets;
+  std::vector<int>& boundary = sets["boundary"];
+  for (int s = 0; s < surface_nodes; ++s) boundary.push_back(core_nodes + (nr - 1) * surface_nodes + s);
+  set_all(mesh);
+  if (n % 2 == 0) sets["center"] = {core_id(n / 2, n / 2, n / 2)};
+  // The sphere's node(s) at the centre of each cube face.
+  const char* extreme[3][2] = {{"leftmost", "rightmost"}, {"lowest", "highest"}, {"backmost", "frontmost"}};
+  for (int axis = 0; axis < 3; ++axis)
+    for (int s = 0; s < 2; ++s) {
+      std::vector<int>& set = sets[extreme[axis][s]];
+      const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+      const int lo = n / 2, hi = (n + 1) / 2;  // equal for n even
+      for (const int u : {lo, hi})
+        for (const int v : {lo, hi}) {
+          std::array<int, 3> p{};
+          p[static_cast<std::size_t>(axis)] = s * n;
+          p[static_cast<std::size_t>(b)] = u;
+          p[static_cast<std::size_t>(c)] = v;
+          set.push_back(id(nr, p[0], p[1], p[2]));
+        }
+      sort_unique(set);
+    }
   return mesh;
 }
 

@@ -103,11 +103,15 @@ double generated_cells2(const MeshSpec& m) {
   return -1.0;
 }
 
-// 3D: the box's nodes and cells (6 tetrahedra a cell with cells = "tet"), or an extrusion's: the
+// 3D: the box's nodes and cells (6 tetrahedra a cell with cells = "tet"), the ball's, or an extrusion's: the
 // 2D mesh's nodes at layers + 1 levels, its cells times the layers (3 tetrahedra a triangle's
 // prism). -1 for a mesh file.
 double generated_nodes(const MeshSpec& m) {
   if (const auto* b = std::get_if<BoxSpec>(&m.source)) return (b->nx + 1.0) * (b->ny + 1.0) * (b->nz + 1.0);
+  if (const auto* b = std::get_if<BallSpec>(&m.source)) {
+    const double n = b->n, nr = std::ceil(n / 2.0);
+    return (n + 1.0) * (n + 1.0) * (n + 1.0) + nr * (6.0 * n * n + 2.0);
+  }
   const double n2 = generated_nodes2(m);
   if (m.extrude && n2 >= 0.0) return n2 * (m.extrude->layers + 1.0);
   return n2;
@@ -115,6 +119,10 @@ double generated_nodes(const MeshSpec& m) {
 
 double generated_cells(const MeshSpec& m) {
   if (const auto* b = std::get_if<BoxSpec>(&m.source)) return (b->tetrahedra ? 6.0 : 1.0) * b->nx * double(b->ny) * b->nz;
+  if (const auto* b = std::get_if<BallSpec>(&m.source)) {
+    const double n = b->n, nr = std::ceil(n / 2.0);
+    return n * n * n + 6.0 * n * n * nr;
+  }
   const double e2 = generated_cells2(m);
   if (m.extrude && e2 >= 0.0) {
     const auto* r = std::get_if<RectangleSpec>(&m.source);
