@@ -557,6 +557,7 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     c.contact.rho_factor = ct->number("rho_factor", 1.0, Range::open(0.0, 2.0));
     c.contact.tolerance = ct->number("tolerance", 1e-10, Range{0.0, 1e-2, true, false});
     c.contact.max_sweeps = static_cast<int>(ct->integer("max_sweeps", 200, 1, 100000));
+    c.contact.frame_updates = static_cast<int>(ct->integer("frame_updates", 0, 0, 100));
     ct->finish();
   }
 

@@ -190,6 +190,12 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   const bool any_contact = !c.obstacles.empty() || !pc.settings.body_pairs.empty();
   j["contact_level"] = !any_contact || pc.spec.scheme == Scheme::explicit_penalty ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
+  // Only where it acts (the semi-explicit scheme at position level, the implicit scheme), and
+  // only when asked for: runs with the paper's frozen frame keep the summary they had.
+  if (any_contact && pc.settings.contact.frame_updates > 0 &&
+      ((pc.spec.scheme == Scheme::semi_explicit && pc.settings.contact.level == ContactLevel::position) ||
+       pc.spec.scheme == Scheme::implicit))
+    j["contact_frame_updates"] = pc.settings.contact.frame_updates;
   with_model(pc, [&](const auto& m) {
     j["nodes"] = m.num_nodes();
     j["elements"] = m.num_cells();

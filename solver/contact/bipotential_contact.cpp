@@ -16,6 +16,9 @@ BipotentialContactT<M::kDim> make_bipotential_contact(const M& model, const std:
   b.x_free.assign(n, {});
   b.weight.assign(n, 0.0);
   b.node_reaction.assign(model.num_nodes(), VecD<M::kDim>::Zero());
+  b.node_mark.assign(model.num_nodes(), 0u);
+  b.reaction_global.assign(n, VecD<M::kDim>::Zero());
+  b.frame_kept.assign(n, 0);
   return b;
 }
 
@@ -81,6 +84,75 @@ void add_reaction_accelerations(const M& model, const BipotentialContactT<M::kDi
   }
 }
 
+namespace {
+
+// One frame update (ContactSettings::frame_updates) of the active contacts, position level: the
+// positions at t+dt that the current reactions give, x = predicted + dt dt_n R / m; at them each
+// active contact's frame, gap and stencil again (the tracked face or segment may change; a node
+// that no longer faces its master keeps the last frame); its reaction carried over in global
+// axes; and the local problem re-linearized there: x_free = (g - n . sum_j factor_j R_j,
+// dt t . v_rel,free), so that x_free + the current reactions' share is the gap at those
+// positions. A rigid plane's frame does not change; a curved obstacle's or a master body's
+// does, by the square of the step's correction.
+template <class M, class Predicted, class VFree>
+void update_frames(const M& model, const std::vector<ObstacleOf<M>>& obstacles, BipotentialContactT<M::kDim>& b,
+                   const State& s, const Predicted& predicted, const VFree& v_free) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  using Local = typename Space<D>::Local;
+  ContactSetT<D>& c = b.set;
+  const double dt = s.dt, dt_n = velocity_step(s);
+  const unsigned mark = b.mark;
+  auto corrected = [&](int j) -> Vec {
+    const Vec x = predicted(j);
+    return b.node_mark[j] == mark ? Vec(x + (dt * dt_n / model.mass[D * j]) * b.node_reaction[j]) : x;
+  };
+  for (int k : c.active) {
+    b.reaction_global[k] = ContactFrame<D>(c.normal[k]).global(c.reaction[k]);
+    typename Space<D>::ObstacleContact oc;
+    const int tracked = c.segment[k];
+    b.frame_kept[k] = !candidate_frame(model, obstacles, c, k, s.u, s.v_half, corrected, oc);
+    if (b.frame_kept[k]) {
+      c.segment[k] = tracked;  // its stencil, normal and x_free stay those of the step
+      continue;
+    }
+    c.normal[k] = oc.normal;
+    b.x_free[k].n = oc.gap;
+  }
+  // The reactions on the new stencils.
+  const unsigned next = ++b.mark;
+  for (int k : c.active)
+    for (int j = 0; j < c.stencil[k].count; ++j) {
+      b.node_reaction[c.stencil[k].node[j]].setZero();
+      b.node_mark[c.stencil[k].node[j]] = next;
+    }
+  for (int k : c.active) {
+    const auto& st = c.stencil[k];
+    const Vec r = b.reaction_global[k];
+    c.reaction[k] = ContactFrame<D>(c.normal[k]).local(r);
+    for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * r;
+  }
+  for (int k : c.active) {
+    if (b.frame_kept[k]) continue;
+    auto& st = c.stencil[k];
+    const ContactFrame<D> f(c.normal[k]);
+    Vec v_rel = Vec::Zero(), shift = Vec::Zero();
+    double w = 0.0;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      v_rel += st.coef[j] * v_free(node);
+      const double wj = dt * dt_n / model.mass[D * node];
+      st.factor[j] = st.coef[j] * wj;
+      w += st.coef[j] * st.factor[j];
+      shift += st.factor[j] * b.node_reaction[node];
+    }
+    b.x_free[k] = Local{b.x_free[k].n - f.local(shift).n, dt * f.tangential(v_rel)};
+    b.weight[k] = w;
+  }
+}
+
+}  // namespace
+
 template <class M>
 void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, const ContactSettings& set,
                    BipotentialContactT<M::kDim>& b, State& s) {
@@ -100,6 +172,7 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
   auto predicted = [&](int j) -> Vec { return model.ref.col(j) + s.u.segment<D>(D * j) + dt * v_free(j); };
   update_boxes(c, predicted);
   begin_step(c);
+  const unsigned mark = ++b.mark;
   // Broad phase: only boundary nodes whose free motion ends behind an obstacle (or inside a
   // master body) at t+dt. Gap and frame at the predicted position, frozen for the step.
   for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
@@ -122,6 +195,7 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
       st.factor[j] = st.coef[j] * wj;
       w += st.coef[j] * st.factor[j];
       b.node_reaction[node].setZero();
+      b.node_mark[node] = mark;
     }
     b.x_free[k] = position ? Local{oc.gap, dt * f.tangential(v_rel)} : f.local(v_rel);
     b.weight[k] = w;
@@ -139,7 +213,14 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
     for (int j = 0; j < st.count; ++j) b.node_reaction[st.node[j]] += st.coef[j] * r;
   }
   bool converged = true;
-  const int sweeps = c.any_friction ? gauss_seidel<true>(set, b, converged) : gauss_seidel<false>(set, b, converged);
+  int sweeps = c.any_friction ? gauss_seidel<true>(set, b, converged) : gauss_seidel<false>(set, b, converged);
+  if (position)
+    for (int pass = 0; pass < set.frame_updates; ++pass) {
+      bool pass_converged = true;
+      update_frames(model, obstacles, b, s, predicted, v_free);
+      sweeps += c.any_friction ? gauss_seidel<true>(set, b, pass_converged) : gauss_seidel<false>(set, b, pass_converged);
+      converged = converged && pass_converged;
+    }
 
   // U_c = dt^2 M^-1 R: the reactions enter the accelerations of step n.
   add_reaction_accelerations(model, b, s);

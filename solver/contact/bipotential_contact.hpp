@@ -20,6 +20,12 @@ struct BipotentialContactT {
   std::vector<typename Space<D>::Local> x_free;
   std::vector<double> weight;            // w = local compliance
   std::vector<VecD<D>, Eigen::aligned_allocator<VecD<D>>> node_reaction;  // per node, sum of r in global axes [N]
+  // Frame updates (ContactSettings::frame_updates): node_reaction[j] is current where
+  // node_mark[j] == mark; each active contact's reaction in global axes before its frame changes.
+  std::vector<unsigned> node_mark;
+  unsigned mark = 0;
+  std::vector<VecD<D>, Eigen::aligned_allocator<VecD<D>>> reaction_global;
+  std::vector<unsigned char> frame_kept;  // 1: the update found no face; the step's frame stays
 };
 using BipotentialContact = BipotentialContactT<2>;
 

@@ -81,6 +81,12 @@ struct ContactSettings {
   double rho_factor = 1.0;    // rho = rho_factor / w per contact (1 = inverse local compliance)
   double tolerance = 1e-10;   // Gauss-Seidel stops when every |dr| <= tolerance |r|
   int max_sweeps = 200;       // Gauss-Seidel sweep cap per step
+  // Semi-explicit scheme at position level: after the sweeps, the active contacts' gaps and
+  // frames are taken again at the positions the reactions give, and the sweeps run again, this
+  // many times (0 = the paper's frame, frozen at the predicted positions for the step). Implicit
+  // scheme: a step with active contacts runs this many Newton iterations more, each taking the
+  // frames again at its iterate.
+  int frame_updates = 0;
 };
 
 // Settings of the penalty springs (penalty_contact.hpp).

@@ -223,7 +223,15 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   auto u_pred = [&](int j) -> Vec {
     return u1_.template segment<D>(D * j) + dt * th * dv_free_.template segment<D>(D * j);
   };
-  auto x_pred = [&](int j) -> Vec { return model_.ref.col(j) + u_pred(j); };
+  // With frame updates ([contact] frame_updates) the frames are taken where the last iteration's
+  // reactions left the nodes, x_pred + c y (y the response to them), and each gap is carried
+  // back to the free prediction linearly, so that x = x_free + c H y stays the gap where the
+  // frame is taken; at convergence that is where the nodes end. Without, at x_pred (the paper's).
+  const bool shifted = position && run_.contact.frame_updates > 0;
+  auto x_pred = [&](int j) -> Vec {
+    if (!shifted) return model_.ref.col(j) + u_pred(j);
+    return model_.ref.col(j) + u_pred(j) + c * y_.template segment<D>(D * j);
+  };
   update_boxes(cs, x_pred);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
     // Gap and frame at the predicted position (see closest() in obstacle.hpp); the reactions of
@@ -235,7 +243,12 @@ bool ImplicitIntegratorT<M>::solve_contact() {
       continue;
     }
     const Stencil& st = cs.stencil[k];
-    const double gap = oc.gap;
+    double gap = oc.gap;
+    if (shifted) {
+      Vec shift = Vec::Zero();
+      for (int j = 0; j < st.count; ++j) shift += st.coef[j] * y_.template segment<D>(D * st.node[j]);
+      gap -= c * oc.normal.dot(shift);
+    }
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
     // engaged contact that separates simply gets R = 0 from the contact law.
     if (gap < 0.0) engaged_[k] = 1;
@@ -505,7 +518,11 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
     // inside an iteration, and a free iterate can have a zero residual (a rigid translation).
     // Converged also requires that no contact candidate outside the engaged set penetrates at u1:
     // the reactions of engaged contacts can push a neighbouring node into the obstacle.
-    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty()) && !engage_penetrating()) break;
+    // With contact frame updates ([contact] frame_updates) a step with active contacts runs that
+    // many iterations more: each takes the frames again where the last one left the nodes.
+    if (r <= set_.newton_tolerance && (it > 0 || contact_.candidates.empty()) &&
+        (contact_.active.empty() || it > run_.contact.frame_updates) && !engage_penetrating())
+      break;
     if (it == set_.max_newton_iterations) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations (relative residual %.3g)", it, r);
