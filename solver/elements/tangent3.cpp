@@ -2,6 +2,8 @@
 // with three DOFs per node, and A = m_scale M + k_scale K_T + c_scale C assembled from the
 // element matrices of element3d.hpp, one cell at a time.
 #include <algorithm>
+#include <cstddef>
+#include <type_traits>
 #include <variant>
 
 #include "solver/elements/system_pattern.hpp"
@@ -34,6 +36,34 @@ void scatter(double* val, const int* slot, const ElementMatrix3<N>& K) {
     for (int q = 0; q < 3 * N; ++q) val[slot[3 * N * r + q]] += K(r, q);
 }
 
+// The element matrix k_scale K_T + c_scale C of cell e of a block into K (overwritten; f, the
+// cell's forces, is scratch). One-point hexahedra: K_T = V B^T A B (+ the hourglass matrix,
+// stiffness form), C = the hourglass matrix (viscous form); 2x2x2 hexahedra and tetrahedra have
+// no damping matrix.
+template <class Law>
+void element_matrix(const Model3& model, const Hex8OnePointBlock& b, std::size_t e, const Law& law,
+                    const double* u, const double* v, double k_scale, double c_scale, Hex8Nodes& f,
+                    Hex8Matrix& K) {
+  Hex8Matrix C;
+  const Hex8OnePointGeom g = cell_geometry(model, b, e);
+  hex8_one_point_stiffness<false>(g, law, gather<8>(u, b.conn[e]), gather<8>(v, b.conn[e]), f, K, C);
+  K = k_scale * K + c_scale * C;
+}
+template <class Law>
+void element_matrix(const Model3& model, const Hex8Block& b, std::size_t e, const Law& law, const double* u,
+                    const double*, double k_scale, double, Hex8Nodes& f, Hex8Matrix& K) {
+  const Hex8Geom g = cell_geometry(model, b, e);
+  hex8_stiffness<false>(g, law, gather<8>(u, b.conn[e]), f, K);
+  K *= k_scale;
+}
+template <class Law>
+void element_matrix(const Model3& model, const Tet4Block& b, std::size_t e, const Law& law, const double* u,
+                    const double*, double k_scale, double, Tet4Nodes& f, Tet4Matrix& K) {
+  const Tet4Geom g = cell_geometry(model, b, e);
+  tet4_stiffness<false>(g, law, gather<4>(u, b.conn[e]), f, K);
+  K *= k_scale;
+}
+
 }  // namespace
 
 SystemMatrix make_system_matrix(const Model3& model) {
@@ -50,47 +80,19 @@ ForceTotals assemble_system(const Model3& model, const double* u, const double* 
   for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
 
   const int* slot = s.slots.data();
-  // One-point hexahedra: K_T = V B^T A B (+ the hourglass matrix, stiffness form), C = the
-  // hourglass matrix (viscous form).
-  for (const auto& b : model.hex8_hourglass)
+  for_each_slot_block(model, [&](const auto& b) {
+    constexpr int N = std::decay_t<decltype(b)>::kNodes;
     std::visit(
         [&](const auto& law) {
-          Hex8Nodes f;
-          Hex8Matrix K, C;
-          for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 576) {
-            const Hex8OnePointGeom g = cell_geometry(model, b, e);
-            hex8_one_point_stiffness<false>(g, law, gather<8>(u, b.conn[e]), gather<8>(v, b.conn[e]), f, K, C);
-            K = k_scale * K + c_scale * C;
-            scatter<8>(val, slot, K);
+          Nodes3<N> f;
+          ElementMatrix3<N> K;
+          for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 9 * N * N) {
+            element_matrix(model, b, e, law, u, v, k_scale, c_scale, f, K);
+            scatter<N>(val, slot, K);
           }
         },
         b.material);
-  for (const auto& b : model.hex8_full)
-    std::visit(
-        [&](const auto& law) {
-          Hex8Nodes f;
-          Hex8Matrix K;
-          for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 576) {
-            const Hex8Geom g = cell_geometry(model, b, e);
-            hex8_stiffness<false>(g, law, gather<8>(u, b.conn[e]), f, K);
-            K *= k_scale;
-            scatter<8>(val, slot, K);
-          }
-        },
-        b.material);
-  for (const auto& b : model.tet4)
-    std::visit(
-        [&](const auto& law) {
-          Tet4Nodes f;
-          Tet4Matrix K;
-          for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 144) {
-            const Tet4Geom g = cell_geometry(model, b, e);
-            tet4_stiffness<false>(g, law, gather<4>(u, b.conn[e]), f, K);
-            K *= k_scale;
-            scatter<4>(val, slot, K);
-          }
-        },
-        b.material);
+  });
   for (int d = 0; d < ndof; ++d) s.diagonal[d] = val[s.diagonal_slots[d]];
   // The forces and totals of the 3D force pass, the ones the Newton residual uses.
   return internal_forces(model, u, v, f_int, with_energy);
