@@ -213,6 +213,57 @@ TEST(Case3, ThreeDimensionalSetUp) {
   EXPECT_EQ(set.model3.gravity, Vec3(0.0, 0.0, -9.81));
 }
 
+// A slave node that starts inside its contact pair's master body is an input error naming the
+// file, both bodies, the deepest node, where it is and how deep (the 2D message); touching is not.
+TEST(Case3, SlaveNodeInsideTheMasterBodyIsNamed) {
+  // Two 2 x 1 x 1 cm boxes. The slave's left face x = 0.016 lies 4 mm inside the master
+  // (x in [0, 0.02]); of its nodes only the middle one, (0.016, 0.005, 0.005), is away from the
+  // master's faces y = 0, 0.01 and z = 0, 0.01: node (i, j, k) = (0, 1, 1) of the 2 x 2 x 2 box,
+  // index (k (ny + 1) + j)(nx + 1) + i = 12, 0.004 m from the master's face x = 0.02.
+  const std::string two_boxes = R"(name = "pair3"
+scheme = "semi_explicit"
+[meshes.master]
+generator = "box"
+size = [0.02, 0.01, 0.01]
+nx = 2
+ny = 1
+nz = 1
+[meshes.slave]
+generator = "box"
+size = [0.02, 0.01, 0.01]
+nx = 2
+ny = 2
+nz = 2
+origin = [0.016, 0.0, 0.0]
+[[bodies]]
+name = "target"
+mesh = "master"
+[bodies.material]
+young = 1e6
+poisson = 0.3
+density = 1000.0
+[[bodies]]
+name = "striker"
+mesh = "slave"
+velocity = [-1.0, 0.0, 0.0]
+[bodies.material]
+young = 1e6
+poisson = 0.3
+density = 1000.0
+[[contact_pairs]]
+slave = "striker"
+master = "target"
+[time]
+end = 1e-4
+)";
+  const std::string e = error_of(two_boxes);
+  EXPECT_EQ(e, temp_file("read").string() +
+                   ": body \"striker\" node 12 at (0.016, 0.005, 0.005) starts inside body \"target\" of a contact "
+                   "pair, 0.004 m deep (the deepest node); move one of the bodies");
+  // Touching (the slave's left face on the master's right face) is not an error.
+  EXPECT_EQ(error_of(two_boxes, {"meshes.slave.origin=[0.02, 0.0, 0.0]"}), "");
+}
+
 // Every 3D obstacle type reads into the checked shape.
 TEST(Case3, ObstacleTypes) {
   const CaseSpec s = read(kBlock, {"obstacles=[{type = \"sphere\", center = [0.0, -1.0, 0.0], radius = 0.5}]"});

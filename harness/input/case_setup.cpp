@@ -338,6 +338,16 @@ void check_obstacle_penetration(const CaseSpec& c, const M& model, const std::ve
   }
 }
 
+// The error of a contact pair whose slave node `worst` (a global index) starts `depth` inside
+// the master body, in either dimension.
+template <class M, class Body>
+InputError slave_inside_master(const CaseSpec& c, const M& model, const Body& slave, const Body& master, int worst,
+                               double depth) {
+  return InputError(c.file + ": body \"" + slave.name + "\" node " + std::to_string(worst - slave.first_node) +
+                    " at " + point_text(model.ref.col(worst)) + " starts inside body \"" + master.name +
+                    "\" of a contact pair, " + depth_text(depth) + " deep (the deepest node); move one of the bodies");
+}
+
 void check_initial_penetration(const CaseSpec& c, const Model& model, const RunSettings& s) {
   check_obstacle_penetration(c, model, s.obstacles);
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
@@ -351,11 +361,7 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
       const double d = grid.depth_inside(model.ref.col(node), depth);
       if (d > depth) depth = d, worst = node;
     }
-    if (worst >= 0)
-      throw InputError(c.file + ": body \"" + slave.name + "\" node " + std::to_string(worst - slave.first_node) +
-                       " at " + point_text(model.ref.col(worst)) + " starts inside body \"" + master.name +
-                       "\" of a contact pair, " + depth_text(depth) +
-                       " deep (the deepest node); move one of the bodies");
+    if (worst >= 0) throw slave_inside_master(c, model, slave, master, worst, depth);
   }
 }
 
@@ -379,11 +385,7 @@ void check_initial_penetration(const CaseSpec& c, const Model3& model, const Run
       const double d = depth_inside(model, surf, u0, model.ref.col(node));
       if (d > depth) depth = d, worst = node;
     }
-    if (worst >= 0)
-      throw InputError(c.file + ": body \"" + slave.name + "\" node " + std::to_string(worst - slave.first_node) +
-                       " at " + point_text(model.ref.col(worst)) + " starts inside body \"" + master.name +
-                       "\" of a contact pair, " + depth_text(depth) +
-                       " deep (the deepest node); move one of the bodies");
+    if (worst >= 0) throw slave_inside_master(c, model, slave, master, worst, depth);
   }
 }
 

@@ -42,7 +42,10 @@ struct ForceTotals {
 // for_each_block of element_kernels.hpp, or element_kernels3.hpp for a Model3); then every node
 // sums its entries in that order, the order in which a serial scatter adds them, and the
 // chunks' totals are combined in chunk order. So the forces equal the serial pass's, and no
-// result depends on the number of threads. One type for both dimensions (internal_forces3.hpp).
+// result depends on the number of threads. One type for both dimensions, with a layout of
+// element_forces per dimension: in 2D a cell's 2N values are contiguous, node I's x force at
+// 2I and its y force at 2I + 1; the 3D layout (cells in batches of kLanes, a node's y and z
+// forces kLanes and 2 kLanes after its x force) is described in internal_forces3.hpp.
 struct ForceScratch {
   struct Chunk {
     int kind = 0;             // the block kind: a BlockKind (Model) or BlockKind3 (Model3)
@@ -52,7 +55,8 @@ struct ForceScratch {
   };
   std::vector<Chunk> chunks;
   std::vector<int> node_offsets;  // num_nodes + 1: node i's entries are [node_offsets[i], node_offsets[i + 1])
-  std::vector<int> entries;       // positions in element_forces of a node's x force (y: + 1, z: + 2), ascending
+  std::vector<int> entries;       // positions in element_forces of a node's x force, ascending (its y
+                                  // force: + 1 in 2D; y and z in 3D: internal_forces3.hpp)
   std::vector<double> element_forces;
   std::vector<ForceTotals> totals;  // per chunk
 };

@@ -1,12 +1,11 @@
 #include "solver/elements/tangent.hpp"
 
 #include <algorithm>
-#include <limits>
-#include <stdexcept>
 #include <tuple>
 #include <type_traits>
 
 #include "solver/elements/element_kernels.hpp"
+#include "solver/elements/system_pattern.hpp"
 
 namespace ricochet {
 namespace {
@@ -121,78 +120,12 @@ void all_blocks(const Model& model, const double* u, const double* v, double k_s
   });
 }
 
-// Appends the slots of one block's elements, row-major over element DOFs.
-template <int N, class Block>
-void block_slots(const Block& b, const SystemMatrix& s, std::vector<int>& slots) {
-  const int* outer = s.matrix.outerIndexPtr();
-  const int* inner = s.matrix.innerIndexPtr();
-  for (const auto& c : b.conn)
-    for (int a = 0; a < 2 * N; ++a) {
-      const int row = 2 * c[a / 2] + a % 2;
-      for (int bb = 0; bb < 2 * N; ++bb) {
-        const int col = 2 * c[bb / 2] + bb % 2;
-        const int* p = std::lower_bound(inner + outer[row], inner + outer[row + 1], col);
-        slots.push_back(static_cast<int>(p - inner));
-      }
-    }
-}
-
 }  // namespace
 
+// Slots in Model order (q4_full, q4_hourglass, t3), the order of for_each_cell_block.
 SystemMatrix make_system_matrix(const Model& model) {
-  const int n = model.num_nodes();
-  // Node adjacency (each node with itself and every node it shares a cell with).
-  std::vector<std::vector<int>> adj(n);
-  for (int a = 0; a < n; ++a) adj[a].push_back(a);
-  const auto add_cells = [&adj](const auto& conn) {
-    for (const auto& c : conn)
-      for (int a : c)
-        for (int b : c) adj[a].push_back(b);
-  };
-  for (const auto& b : model.q4_full) add_cells(b.conn);
-  for (const auto& b : model.q4_hourglass) add_cells(b.conn);
-  for (const auto& b : model.t3) add_cells(b.conn);
-  std::size_t nnz = 0;
-  for (auto& l : adj) {
-    std::sort(l.begin(), l.end());
-    l.erase(std::unique(l.begin(), l.end()), l.end());
-    nnz += 4 * l.size();
-  }
-  if (nnz > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    throw std::length_error("make_system_matrix: too many non-zeros for int indices");
-
-  SystemMatrix s;
-  s.matrix.resize(2 * n, 2 * n);  // compressed, empty
-  s.matrix.resizeNonZeros(static_cast<Eigen::Index>(nnz));
-  int* outer = s.matrix.outerIndexPtr();
-  int* inner = s.matrix.innerIndexPtr();
-  int pos = 0;
-  for (int a = 0; a < n; ++a)
-    for (int i = 0; i < 2; ++i) {
-      outer[2 * a + i] = pos;
-      for (int b : adj[a]) {
-        inner[pos++] = 2 * b;
-        inner[pos++] = 2 * b + 1;
-      }
-    }
-  outer[2 * n] = pos;
-  std::fill(s.matrix.valuePtr(), s.matrix.valuePtr() + nnz, 0.0);
-
-  std::size_t num_slots = 0;
-  for (const auto& b : model.q4_full) num_slots += 64 * b.conn.size();
-  for (const auto& b : model.q4_hourglass) num_slots += 64 * b.conn.size();
-  for (const auto& b : model.t3) num_slots += 36 * b.conn.size();
-  s.slots.reserve(num_slots);
-  for (const auto& b : model.q4_full) block_slots<4>(b, s, s.slots);
-  for (const auto& b : model.q4_hourglass) block_slots<4>(b, s, s.slots);
-  for (const auto& b : model.t3) block_slots<3>(b, s, s.slots);
-
-  s.diagonal_slots.resize(2 * n);
-  for (int d = 0; d < 2 * n; ++d)
-    s.diagonal_slots[d] = static_cast<int>(
-        std::lower_bound(inner + outer[d], inner + outer[d + 1], d) - inner);
-  s.diagonal = Eigen::VectorXd::Zero(2 * n);
-  return s;
+  return system_pattern::make_system_matrix<2>(
+      model.num_nodes(), [&model](auto&& fn) { for_each_cell_block(model, fn); });
 }
 
 ForceTotals assemble_system(const Model& model, const double* u, const double* v, double m_scale,

@@ -18,9 +18,10 @@
 namespace ricochet {
 
 // A sparse Dn x Dn symmetric matrix (D = 2 or 3 DOFs per node) with the fixed pattern of the
-// model's element couplings (full storage, both triangles), built once; assembly only overwrites
-// values. Pattern: row Da+i holds the columns Db+k (k < D) of every node b that shares a cell
-// with node a, and always its own D columns (so the diagonal exists even for a node in no cell).
+// model's element couplings (full storage, both triangles), built once by the same code for
+// either D (system_pattern.hpp); assembly only overwrites values. Pattern: row Da+i holds the
+// columns Db+k (k < D) of every node b that shares a cell with node a, and always its own D
+// columns (so the diagonal exists even for a node in no cell).
 struct SystemMatrix {
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix;
   // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model; in 3D

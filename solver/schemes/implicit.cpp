@@ -13,28 +13,25 @@
 namespace ricochet {
 namespace {
 
+// The thickness of a body in internal_force_roundoff whose largest cell size is `size` [m]:
+// the body's thickness in 2D, the cell size in 3D.
+inline double roundoff_thickness(const BodyInfo& b, double) { return b.thickness; }
+inline double roundoff_thickness(const BodyInfo3&, double size) { return size; }
+
 // The round-off floor of the internal nodal forces [N]: a cell's stress carries an error of
 // about eps (lambda + 2 mu) from the cancellation in E = (F^T F - I)/2 near F = I, and its
 // nodal forces about that times its size and thickness; 16 such errors, of the stiffest cell.
 // (lambda + 2 mu) = rho c_p^2 and the cell size L_e = c_p cell_dt (model.hpp). In 3D the
 // thickness is the cell size too: the error scales with the cell's face area L_e^2.
-double internal_force_roundoff(const Model& model) {
+template <class M>
+double internal_force_roundoff(const M& model) {
   double f = 0.0;
-  for (const BodyInfo& b : model.bodies) {
+  for (const auto& b : model.bodies) {
     const double rho = material_density(b.material), c = material_wave_speed(b.material);
     double size = 0.0;
     for (int k = b.first_cell; k < b.first_cell + b.num_cells; ++k) size = std::max(size, c * model.cell_dt[k]);
-    f = std::max(f, 16.0 * std::numeric_limits<double>::epsilon() * rho * c * c * size * b.thickness);
-  }
-  return f;
-}
-double internal_force_roundoff(const Model3& model) {
-  double f = 0.0;
-  for (const BodyInfo3& b : model.bodies) {
-    const double rho = material_density(b.material), c = material_wave_speed(b.material);
-    double size = 0.0;
-    for (int k = b.first_cell; k < b.first_cell + b.num_cells; ++k) size = std::max(size, c * model.cell_dt[k]);
-    f = std::max(f, 16.0 * std::numeric_limits<double>::epsilon() * rho * c * c * size * size);
+    f = std::max(f,
+                 16.0 * std::numeric_limits<double>::epsilon() * rho * c * c * size * roundoff_thickness(b, size));
   }
   return f;
 }

@@ -1,0 +1,92 @@
+// The fixed sparsity pattern of a SystemMatrix (tangent.hpp), in either dimension: one build
+// for make_system_matrix(const Model&) (tangent.cpp, D = 2) and make_system_matrix(const Model3&)
+// (tangent3.cpp, D = 3). Index arithmetic only: no floating-point value depends on it.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+#include <type_traits>
+#include <vector>
+
+#include "solver/elements/tangent.hpp"
+
+namespace ricochet::system_pattern {
+
+// The number of nodes of a block's cells (its conn holds std::array<int, N>).
+template <class Block>
+inline constexpr int kCellNodes = static_cast<int>(
+    std::tuple_size_v<typename std::decay_t<decltype(std::declval<const Block&>().conn)>::value_type>);
+
+// Appends the slots of one block's cells: for cell c the positions in s.matrix.valuePtr() of
+// the entries (D c[a] + i, D c[b] + k), row-major over the element DOFs D a + i.
+template <int D, class Block>
+void block_slots(const Block& b, const SystemMatrix& s, std::vector<int>& slots) {
+  constexpr int N = kCellNodes<Block>;
+  const int* outer = s.matrix.outerIndexPtr();
+  const int* inner = s.matrix.innerIndexPtr();
+  for (const auto& c : b.conn)
+    for (int r = 0; r < D * N; ++r) {
+      const int row = D * c[r / D] + r % D;
+      for (int q = 0; q < D * N; ++q) {
+        const int col = D * c[q / D] + q % D;
+        const int* p = std::lower_bound(inner + outer[row], inner + outer[row + 1], col);
+        slots.push_back(static_cast<int>(p - inner));
+      }
+    }
+}
+
+// The SystemMatrix of n nodes with D DOFs each (values zero, diagonal zero): the pattern of
+// SystemMatrix (row D a + i holds the columns D b + k of every node b that shares a cell with
+// node a, and node a's own), its slots and its diagonal slots. for_each_block(fn) calls
+// fn(block) for every element block, in the order in which the assembly reads the slots.
+template <int D, class ForEachBlock>
+SystemMatrix make_system_matrix(int n, ForEachBlock&& for_each_block) {
+  // Node adjacency (each node with itself and every node it shares a cell with).
+  std::vector<std::vector<int>> adj(n);
+  for (int a = 0; a < n; ++a) adj[a].push_back(a);
+  std::size_t num_slots = 0;
+  for_each_block([&](const auto& b) {
+    constexpr int N = kCellNodes<std::decay_t<decltype(b)>>;
+    for (const auto& c : b.conn)
+      for (int a : c)
+        for (int q : c) adj[a].push_back(q);
+    num_slots += static_cast<std::size_t>(D * N) * (D * N) * b.conn.size();
+  });
+  std::size_t nnz = 0;
+  for (auto& l : adj) {
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+    nnz += D * D * l.size();
+  }
+  if (nnz > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw std::length_error("make_system_matrix: too many non-zeros for int indices");
+
+  SystemMatrix s;
+  s.matrix.resize(D * n, D * n);  // compressed, empty
+  s.matrix.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = s.matrix.outerIndexPtr();
+  int* inner = s.matrix.innerIndexPtr();
+  int pos = 0;
+  for (int a = 0; a < n; ++a)
+    for (int i = 0; i < D; ++i) {
+      outer[D * a + i] = pos;
+      for (int b : adj[a])
+        for (int k = 0; k < D; ++k) inner[pos++] = D * b + k;
+    }
+  outer[D * n] = pos;
+  std::fill(s.matrix.valuePtr(), s.matrix.valuePtr() + nnz, 0.0);
+
+  s.slots.reserve(num_slots);
+  for_each_block([&s](const auto& b) { block_slots<D>(b, s, s.slots); });
+
+  s.diagonal_slots.resize(D * n);
+  for (int d = 0; d < D * n; ++d)
+    s.diagonal_slots[d] = static_cast<int>(std::lower_bound(inner + outer[d], inner + outer[d + 1], d) - inner);
+  s.diagonal = Eigen::VectorXd::Zero(D * n);
+  return s;
+}
+
+}  // namespace ricochet::system_pattern
