@@ -14,6 +14,8 @@ Kim–Kwak-type problem and the 3D cases (report_three_d.py).
                                                 [--three-d-fields FIELDS_DIR]
                                                 [--three-d-table1 TDT1_DIR]
                                                 [--three-d-stability TDS_DIR]
+                                                [--ball-block BB_DIR]
+                                                [--ball-block-fields FIELDS_DIR]
                                                 [--out OUT] [--max-run-plots N] [--no-discover]
 
 DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
@@ -39,6 +41,10 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            table1_fast.toml: Table 1 in 3D) and a folder of `ricochet stability` results of the
            3D meshes (subfolders with stability.json). Without --three-d-table1, DIR itself when
            it is that sweep.
+--ball-block, --ball-block-fields  the sweep of cases/three_d/ball_block_sweep.toml (or
+           ball_block_fast.toml) and a run of cases/three_d/ball_block.toml with fields (the
+           Mooney–Rivlin ball on a free block, in the 3D part: report_ball_block.py). Without
+           --ball-block, DIR itself when its runs are that case.
 --long-runs a finished sweep of cases/long_runs/sweep.toml with the drift.csv of
            reports/long_runs.py (energy residual per scene and scheme, the drift table). Without
            it, DIR itself when it holds a drift.csv.
@@ -50,11 +56,12 @@ DIR/accuracy, DIR/../stability, DIR/stability, DIR/../verification, DIR/verifica
 DIR/../kim_kwak, DIR/kim_kwak, DIR/../rubber_groove, DIR/rubber_groove, DIR/../envelope,
 DIR/envelope, DIR/../long_runs, DIR/long_runs, DIR/../three_d, DIR/three_d,
 DIR/../three_d_refinement, DIR/three_d_refinement, DIR/../oblique_block, DIR/oblique_block,
-DIR/../three_d_table1, DIR/three_d_table1, DIR/../three_d_stability and DIR/three_d_stability
+DIR/../three_d_table1, DIR/three_d_table1, DIR/../three_d_stability, DIR/three_d_stability,
+DIR/../ball_block, DIR/ball_block, DIR/../ball_block_fields and DIR/ball_block_fields
 (unless --no-discover); a source that is missing
 gives a "not available" section saying how to produce it, never a crash. For any other sweep
-only DIR/stability is looked for, and for a 3D sweep (cases/three_d/sweep.toml or table1.toml)
-the other 3D sources as above; parts without data are left out.
+only DIR/stability is looked for, and for a 3D sweep (cases/three_d/sweep.toml, table1.toml or
+ball_block_sweep.toml) the other 3D sources as above; parts without data are left out.
 
 Writes OUT/index.html (self-contained apart from its relative figure links), OUT/report.md,
 OUT/manifest.json (figures, tables and their row labels) and the figures (PNG; SVG for the
@@ -81,6 +88,7 @@ import report_figures as F  # noqa: E402
 import report_generic as RG  # noqa: E402
 import report_kim_kwak as RK  # noqa: E402
 import report_stability as RS  # noqa: E402
+import report_ball_block as RB  # noqa: E402
 import report_three_d as R3  # noqa: E402
 import report_verification as RV  # noqa: E402
 from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_files,  # noqa: E402
@@ -812,7 +820,7 @@ SWEEP_SECTIONS = [
     ("kim_kwak", lambda c: RK.sections(c, Section) if c.get("kk") or c.get("kk_fields")
      else []),
     ("three_d", lambda c: R3.sections(c, Section) if c.get("td") or c.get("td_fields")
-     or c.get("td_t1") or c.get("td_stab") else []),
+     or c.get("td_t1") or c.get("td_stab") or c.get("bb") or c.get("bb_fields") else []),
     ("histories", sec_histories),
 ]
 
@@ -970,6 +978,8 @@ def render(ctx, sections):
            "three_d_fields": ctx.get("td_fields"),
            "three_d_table1": ctx["td_t1"].dir if ctx.get("td_t1") else None,
            "three_d_stability": ctx.get("td_stab") or [],
+           "ball_block": ctx["bb"].dir if ctx.get("bb") else None,
+           "ball_block_fields": ctx.get("bb_fields"),
            "stability": ctx.get("stab_files") or [], "sections": []}
     for s in sections:
         man["sections"].append({
@@ -1011,7 +1021,8 @@ def discover(main_dir, args):
     return (sweep_folder(args.accuracy, "accuracy"), stab,
             sweep_folder(args.verification, "verification"), sweep_folder(args.kim_kwak, "kim_kwak"),
             os.path.abspath(fields) if fields else None,
-            sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"), three_d)
+            sweep_folder(args.envelope, "envelope"), sweep_folder(args.long_runs, "long_runs"), three_d,
+            discover_ball_block(main_dir, args))
 
 
 def discover_three_d(main_dir, args, found=()):
@@ -1036,6 +1047,23 @@ def discover_three_d(main_dir, args, found=()):
     return (sweep_folder(td, "three_d"), sweep_folder(args.three_d_refinement, "three_d_refinement"),
             os.path.abspath(td_fields) if td_fields else None, sweep_folder(t1, "three_d_table1"),
             os.path.abspath(stab) if stab else None)
+
+
+def discover_ball_block(main_dir, args, found=None):
+    """The sources of the ball on the block (its sweep, its run with fields): as given, else
+    found beside or inside main_dir (unless --no-discover). found: the sweep already known,
+    e.g. the main sweep itself."""
+    parent = os.path.dirname(os.path.abspath(main_dir))
+    places = lambda name: (os.path.join(parent, name), os.path.join(main_dir, name))  # noqa: E731
+    bb = found if found is not None else getattr(args, "ball_block", None)
+    fields = getattr(args, "ball_block_fields", None)
+    if not args.no_discover:
+        if bb is None:
+            bb = next((c for c in places("ball_block")
+                       if os.path.exists(os.path.join(c, "summary.csv"))), None)
+        if fields is None:
+            fields = next((c for c in places("ball_block_fields") if RK.find_fields(c)), None)
+    return bb, os.path.abspath(fields) if fields else None
 
 
 def is_three_d_table1(sweep, cases):
@@ -1068,6 +1096,22 @@ def td_meta(td, err, ref, ref_err):
             + "); refinement " + (f"`{ref.dir}` ({len(ref.runs)} runs)" if ref is not None else
                                   "not available" + (f" ({ref_err})" if ref_err else "")
                                   + f": run `{R3.REF_CMD}`"))
+
+
+def bb_meta(bb, err, fields):
+    if bb is None:
+        line = "not available" + (f" ({err})" if err else "") + f": run `{RB.BB_CMD}`"
+    else:
+        gates = RK.gates_result(bb.dir)[0]
+        line = (f"`{bb.dir}` (sweep `{bb.name}`, {len(bb.runs)} runs; "
+                + (f"gates {gates}" if gates else "no gates-junit.xml") + ")")
+    fdir = RK.find_fields(fields)
+    if fdir is not None:
+        line += f"; fields run `{show_path(fields)}` ({len(field_files(fdir))} field files)"
+    else:
+        line += ("; fields run not available" + (f" (no fields/*.vtu in `{fields}`)" if fields
+                                                 else "") + f": run `{RB.FIELDS_CMD}`")
+    return line
 
 
 def kk_meta(kk, err):
@@ -1147,14 +1191,20 @@ def generic_sources(main_sweep, args):
     t1 = args.three_d_table1
     if t1 is None and is_three_d_table1(main_sweep, cases):
         t1 = main_sweep.dir
-    if main_sweep.dir in (td, t1):
+    bb = getattr(args, "ball_block", None)
+    if bb is None and RB.CASE in cases:
+        bb = main_sweep.dir
+    if main_sweep.dir in (td, t1, bb):
         # a 3D sweep: the other 3D sources beside it, as for the paper's sweep
         three_d = discover_three_d(main_sweep.dir, args, (td, t1))
+        ball_block = discover_ball_block(main_sweep.dir, args, bb)
     else:
         three_d = (td, args.three_d_refinement,
                    os.path.abspath(args.three_d_fields) if args.three_d_fields else None, t1,
                    os.path.abspath(args.three_d_stability) if args.three_d_stability else None)
-    return args.accuracy, stab, ver, kk, fields, env, long_dir, three_d
+        bb_fields = getattr(args, "ball_block_fields", None)
+        ball_block = (bb, os.path.abspath(bb_fields) if bb_fields else None)
+    return args.accuracy, stab, ver, kk, fields, env, long_dir, three_d, ball_block
 
 
 def main(argv=None):
@@ -1185,13 +1235,19 @@ def main(argv=None):
     ap.add_argument("--three-d-stability", metavar="TDS_DIR",
                     help="folder of ricochet stability results of the 3D meshes (subfolders "
                          "with stability.json)")
+    ap.add_argument("--ball-block", metavar="BB_DIR",
+                    help="sweep folder of the ball on the block "
+                         "(cases/three_d/ball_block_sweep.toml)")
+    ap.add_argument("--ball-block-fields", metavar="FIELDS_DIR",
+                    help="run folder of cases/three_d/ball_block.toml with fields/*.vtu")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")
     ap.add_argument("--no-discover", action="store_true",
                     help="do not look for accuracy/, stability/, verification/, kim_kwak/, "
                          "rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, "
-                         "oblique_block/, three_d_table1/ and three_d_stability/ next to DIR")
+                         "oblique_block/, three_d_table1/, three_d_stability/, ball_block/ and "
+                         "ball_block_fields/ next to DIR")
     args = ap.parse_args(argv)
     if args.max_run_plots < 0:
         ap.error(f"--max-run-plots {args.max_run_plots}: must be 0 or more")
@@ -1212,12 +1268,13 @@ def main(argv=None):
               file=sys.stderr)
         return 1
     if paper:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d = \
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d, ball_block = \
             discover(args.dir, args)
     else:
-        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d = \
+        acc_dir, stab_paths, ver_dir, kk_dir, kk_fields, env_dir, long_dir, three_d, ball_block = \
             generic_sources(main_sweep, args)
     td_dir, td_ref_dir, td_fields, td_t1_dir, td_stab_dir = three_d
+    bb_dir, bb_fields = ball_block
     same_dir = lambda d: d is not None and os.path.abspath(d) == main_sweep.dir  # noqa: E731
     acc, acc_err = read_sweep(acc_dir, "accuracy") if acc_dir else (None, None)
     ver, ver_err = ((main_sweep, None) if same_dir(ver_dir) else
@@ -1232,6 +1289,8 @@ def main(argv=None):
     td_t1, td_t1_err = ((main_sweep, None) if same_dir(td_t1_dir) else
                         read_sweep(td_t1_dir, "three_d_table1") if td_t1_dir else (None, None))
     td_stab = find_stability_files([td_stab_dir]) if td_stab_dir else []
+    bb, bb_err = ((main_sweep, None) if same_dir(bb_dir) else
+                  read_sweep(bb_dir, "ball_block") if bb_dir else (None, None))
     env, env_err = None, None     # env: (Sweep, [EnvPoint]) of the envelope sweep
     if env_dir:
         sw_env, got = RS.read_envelope(env_dir)
@@ -1250,7 +1309,8 @@ def main(argv=None):
            "max_run_plots": args.max_run_plots, "env": env, "env_err": env_err,
            "long": long_sw, "long_err": long_err, "td": td, "td_err": td_err, "td_ref": td_ref,
            "td_ref_err": td_ref_err, "td_fields": td_fields, "td_t1": td_t1,
-           "td_t1_err": td_t1_err, "td_stab": td_stab}
+           "td_t1_err": td_t1_err, "td_stab": td_stab, "bb": bb, "bb_err": bb_err,
+           "bb_fields": bb_fields}
 
     commit, dirty = git_commit(REPO)
     program = main_sweep.meta.get("program", "unknown")
@@ -1292,6 +1352,7 @@ def main(argv=None):
             ("3D fields run", f"`{show_path(td_fields)}`" if td_fields else
              f"not available: run `{R3.FIELDS_CMD}`"),
             ("3D Table 1", td_t1_meta(td_t1, td_t1_err, td_stab_dir, td_stab)),
+            ("3D ball on a block", bb_meta(bb, bb_err, bb_fields)),
         ] + common_tail + [
             ("Paper's numbers", f"`{os.path.relpath(REFERENCE_TOML, REPO)}` (Cros, Feng & "
                                 "Magnain, C. R. Mécanique 338 (2010) 176–180)"),
@@ -1326,6 +1387,8 @@ def main(argv=None):
             meta.append(("3D fields run", f"`{show_path(td_fields)}`"))
         if (td_t1 is not None and td_t1 is not main_sweep) or td_t1_err or td_stab:
             meta.append(("3D Table 1", td_t1_meta(td_t1, td_t1_err, td_stab_dir, td_stab)))
+        if (bb is not None and bb is not main_sweep) or bb_err or bb_fields:
+            meta.append(("3D ball on a block", bb_meta(bb, bb_err, bb_fields)))
         meta += common_tail + [("Report written", now)]
     ctx["meta"] = meta
 

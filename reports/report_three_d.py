@@ -10,6 +10,9 @@
   * the sweep of cases/three_d/table1.toml (or table1_fast.toml), the paper's Table 1 in 3D: wall
     time and energy error per mesh x dt x scheme, with the penalty runs at their automatic step,
     and `ricochet stability` results of the 3D meshes beside them.
+  * the sweep of cases/three_d/ball_block_sweep.toml and a run of cases/three_d/ball_block.toml
+    with its fields: the Mooney-Rivlin ball striking a free Mooney-Rivlin block
+    (report_ball_block.py).
 
 A source that is missing gives "not available" sections with the command that produces it.
 """
@@ -42,7 +45,7 @@ STAB_MORE = ("(and likewise for the mesh M1x4 and the scheme `implicit`, with `-
 DOC = os.path.join(REPO, "docs", "three-dimensions.md")
 T1_ANCHOR = "#the-3d-table-1"
 PART_TITLE = ("Three dimensions: the bar on a wall, the oblique block against plane stress, "
-              "frame invariance, Table 1 in 3D")
+              "frame invariance, Table 1 in 3D, a Mooney–Rivlin ball on a free block")
 MAX_PANELS = 6
 
 # The bar (cases/three_d/bar_wall3.toml): rho c v0 A and 2L/c.
@@ -155,19 +158,21 @@ def fig_bar(outdir, stem, runs):
 # Sections
 
 def sections(ctx, Section):
+    import report_ball_block as RB   # here: it imports this module for its helpers
     intro = (
         "The three schemes on 3D models (" + doc_link(ctx["out"]) + "): a bar striking a "
         "rigid wall against the 1D solution, the paper's plate extruded through its 1 cm "
         "thickness and hitting a rigid plane at (3, −5, 0) m/s beside the 2D plane-stress plate, "
-        "and the same block with the whole scene turned about an oblique axis; and the paper's "
-        "Table 1 (mesh × Δt × scheme) on the block. Contact between bodies in 3D is not there "
-        "yet.")
+        "and the same block with the whole scene turned about an oblique axis; the paper's "
+        "Table 1 (mesh × Δt × scheme) on the block; and contact between two bodies in 3D: a "
+        "Mooney–Rivlin ball striking a free Mooney–Rivlin block obliquely, with friction ("
+        + RB.doc_link(ctx["out"]) + ").")
     builders = (("td_shapes", "The oblique block in 3D: deformed shapes", sec_shapes),
                 ("td_bar", "The bar on a rigid wall in 3D", sec_bar),
                 ("td_oblique", "The oblique block against the 2D plane-stress plate", sec_oblique),
                 ("td_frame", "Frame invariance: the turned scene", sec_frame),
                 ("td_table1", "Table 1 in 3D: wall time and energy error per mesh × Δt × scheme",
-                 sec_table1))
+                 sec_table1)) + RB.builders()
     return RG.part_sections(ctx, Section, builders, PART_TITLE, intro)
 
 

@@ -171,6 +171,35 @@ TEST(BodyContact3Schemes, HeadOnBarsConserveMomentumAndFollowThe1DSolution) {
   }
 }
 
+// The oblique impact below: a 4 x 2 x 2 cm block at v0 onto a free 10 x 2 x 4 cm block, E = 1e8 Pa,
+// rho = 1000 kg/m^3, no gravity, a one-way pair with friction mu; 2e-4 s at 0.9 x the critical step.
+const Vec3 kObliqueV0(2.0, -1.0, 0.5);
+struct ObliqueImpact {
+  Model3 model;
+  RunSettings settings;
+  Vec3 p0 = 1000.0 * 0.04 * 0.02 * 0.02 * kObliqueV0;  // the top block's momentum [kg m/s]
+  ObliqueImpact(bool tets, double mu) {
+    model = build_model3(
+        {box_body("top", Vec3(0.04, 0.02, 0.02), 4, 2, 2, Vec3(0.01, 0.02, 0.01), kObliqueV0, tets, 1e8, 1000.0),
+         box_body("bottom", Vec3(0.1, 0.02, 0.04), 10, 2, 4, Vec3::Zero(), Vec3::Zero(), tets, 1e8, 1000.0)},
+        Vec3::Zero());
+    settings.dt = 0.9 * model.critical_dt;
+    settings.end_time = 2e-4;
+    settings.monitor_every = 1;
+    settings.threads = 1;
+    settings.body_pairs = {{0, 1, mu, "pair"}};
+  }
+  // The largest |p(t) - p0| over the history and the components.
+  double momentum_deviation(const RunResult& r) const {
+    const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y"),
+               pz = column(r.history, "momentum_z");
+    double dev = 0.0;
+    for (std::size_t i = 0; i < px.size(); ++i)
+      dev = std::max({dev, std::abs(px[i] - p0.x()), std::abs(py[i] - p0.y()), std::abs(pz[i] - p0.z())});
+    return dev;
+  }
+};
+
 // A block falls obliquely onto a free block (no gravity), mu = 0.3: the friction forces are
 // internal too, every momentum component stays, sliding dissipates energy, and the tangential
 // impulse (the sum of |r_t|) stays within mu times the normal impulse (the cone at every contact).
@@ -180,26 +209,12 @@ TEST(BodyContact3Schemes, ObliqueFrictionalImpactConservesMomentum) {
     for (bool tets : {false, true}) {
       if (tets && scheme != Scheme::semi_explicit) continue;
       SCOPED_TRACE(std::string(name(scheme)) + (tets ? " tet4" : " hex8"));
-      const Vec3 v0(2.0, -1.0, 0.5);
-      Model3 model = build_model3(
-          {box_body("top", Vec3(0.04, 0.02, 0.02), 4, 2, 2, Vec3(0.01, 0.02, 0.01), v0, tets, 1e8, 1000.0),
-           box_body("bottom", Vec3(0.1, 0.02, 0.04), 10, 2, 4, Vec3::Zero(), Vec3::Zero(), tets, 1e8, 1000.0)},
-          Vec3::Zero());
-      RunSettings s;
-      s.dt = scheme == Scheme::implicit ? 1e-6 : 0.9 * model.critical_dt;
-      s.end_time = 2e-4;
-      s.monitor_every = 1;
-      s.threads = 1;
-      s.body_pairs = {{0, 1, mu, "pair"}};
-      const RunResult r = run(model, s, scheme);
+      ObliqueImpact o(tets, mu);
+      if (scheme == Scheme::implicit) o.settings.dt = 1e-6;
+      const RunResult r = run(o.model, o.settings, scheme);
       ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
-      const double m_top = 1000.0 * 0.04 * 0.02 * 0.02;
-      const Vec3 p0 = m_top * v0;
-      const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y"),
-                 pz = column(r.history, "momentum_z");
-      double dev = 0.0;
-      for (std::size_t i = 0; i < px.size(); ++i)
-        dev = std::max({dev, std::abs(px[i] - p0.x()), std::abs(py[i] - p0.y()), std::abs(pz[i] - p0.z())});
+      const Vec3 p0 = o.p0;
+      const double dev = o.momentum_deviation(r);
       std::printf("[oblique 3D %s%s] momentum deviation %.2e of |p0|, friction dissipation %.3e J, normal impulse "
                   "%.4e N s, tangential %.4e N s (ratio %.4f, mu %.1f), contact steps %ld, penetration %.2e m\n",
                   name(scheme), tets ? " tet4" : "", dev / p0.norm(), r.friction_dissipation, r.contact_impulse_normal,
@@ -237,26 +252,12 @@ TEST(BodyContact3Schemes, FrameUpdatesCloseTheFrozenFrameGap) {
     double frozen = 0.0;
     for (int updates : {0, 1, 10}) {
       SCOPED_TRACE(std::string(tets ? "tet4" : "hex8") + ", frame_updates " + std::to_string(updates));
-      const Vec3 v0(2.0, -1.0, 0.5);
-      Model3 model = build_model3(
-          {box_body("top", Vec3(0.04, 0.02, 0.02), 4, 2, 2, Vec3(0.01, 0.02, 0.01), v0, tets, 1e8, 1000.0),
-           box_body("bottom", Vec3(0.1, 0.02, 0.04), 10, 2, 4, Vec3::Zero(), Vec3::Zero(), tets, 1e8, 1000.0)},
-          Vec3::Zero());
-      RunSettings s;
-      s.dt = 0.9 * model.critical_dt;
-      s.end_time = 2e-4;
-      s.monitor_every = 1;
-      s.threads = 1;
-      s.body_pairs = {{0, 1, mu, "pair"}};
-      s.contact.frame_updates = updates;
-      const RunResult r = run(model, s, Scheme::semi_explicit);
+      ObliqueImpact o(tets, mu);
+      o.settings.contact.frame_updates = updates;
+      const RunResult r = run(o.model, o.settings, Scheme::semi_explicit);
       ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
-      const Vec3 p0 = 1000.0 * 0.04 * 0.02 * 0.02 * v0;
-      const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y"),
-                 pz = column(r.history, "momentum_z");
-      double dev = 0.0;
-      for (std::size_t i = 0; i < px.size(); ++i)
-        dev = std::max({dev, std::abs(px[i] - p0.x()), std::abs(py[i] - p0.y()), std::abs(pz[i] - p0.z())});
+      const Vec3 p0 = o.p0;
+      const double dev = o.momentum_deviation(r);
       std::printf("[frame updates 3D %s, %d] penetration %.2e m, momentum deviation %.2e of |p0|, tangential/normal "
                   "impulse %.4f, friction dissipation %.4e J, unconverged steps %ld\n",
                   tets ? "tet4" : "hex8", updates, r.penetration_max, dev / p0.norm(),

@@ -12,6 +12,10 @@ Builds, in a temporary folder and with the given ricochet binary:
   * the Kim–Kwak-type sweep cases/kim_kwak/sweep.toml with its gates (five runs, ~2.5 s, in the
     background while the other sweeps run), placed next to the paper sweep so that the report
     discovers it, and one run of cases/kim_kwak/rubber_groove.toml with its fields;
+  * a tiny sweep of the Mooney–Rivlin ball on a free block (BB_SWEEP: the groups of
+    cases/three_d/ball_block_fast.toml for 1 ms, ~8 s, in the background) checked with
+    ci/gates/ball_block_fast.toml, next to the paper sweep (discovered), and a 1 ms run of
+    cases/three_d/ball_block.toml with fields (given with --ball-block-fields);
   * a synthetic stability-envelope sweep (a summary.csv of searches and remedy runs, ENV_ROWS)
     next to the paper sweep (discovered), and a tiny long-run sweep (two scenes, 0.03 s each, a
     failed row added) with its drift.csv written by reports/long_runs.py (given with
@@ -161,11 +165,34 @@ KK_SWEEP = os.path.join(REPO, "cases", "kim_kwak", "sweep.toml")
 KK_CASE = os.path.join(REPO, "cases", "kim_kwak", "rubber_groove.toml")
 KK_GATES = os.path.join(REPO, "ci", "gates", "kim_kwak.toml")
 KK_IDS = ("kk_shapes", "kk_histories", "kk_interfaces", "kk_runs")
-TD_IDS = ("td_shapes", "td_bar", "td_oblique", "td_frame", "td_table1")
+BB_IDS = ("bb_shapes", "bb_histories", "bb_runs")   # report_ball_block.py, in the 3D part
+TD_IDS = ("td_shapes", "td_bar", "td_oblique", "td_frame", "td_table1") + BB_IDS
 TD_SWEEP = os.path.join(REPO, "cases", "three_d", "sweep.toml")
 TD_T1_SWEEP = os.path.join(REPO, "cases", "three_d", "table1_fast.toml")
 TD_GATES = os.path.join(REPO, "ci", "gates", "three_d.toml")
 TD_CASE = os.path.join(REPO, "cases", "three_d", "oblique_block.toml")
+BB_CASE = os.path.join(REPO, "cases", "three_d", "ball_block.toml")
+BB_GATES = os.path.join(REPO, "ci", "gates", "ball_block_fast.toml")
+# The groups of cases/three_d/ball_block_fast.toml for 1 ms (the ball touches the block at
+# 0.24 ms): semi-explicit with and without frame updates, implicit, penalty with the soft
+# constraint.
+BB_SWEEP = f"""
+name = "tiny_ball_block"
+base = "{BB_CASE}"
+set = {{ "output.fields" = [], "time.end" = 1e-3 }}
+
+[[group]]
+name = "semi"
+cross = {{ "contact.frame_updates" = [10, 0] }}
+
+[[group]]
+name = "implicit"
+set = {{ scheme = "implicit", "time.dt" = 1e-4, "contact.frame_updates" = 1 }}
+
+[[group]]
+name = "penalty"
+set = {{ scheme = "explicit_penalty", "penalty.soft" = true }}
+"""
 ENV_IDS = ("envelope", "envelope_unsafe")           # report_stability.py: the envelope sweep
 LONG_IDS = ("long_runs", "long_runs_table")         # and the long-run sweep with drift.csv
 LONG_RUNS_PY = os.path.join(REPO, "reports", "long_runs.py")
@@ -502,6 +529,17 @@ class ReportSmoke(unittest.TestCase):
         cls.td_stab = os.path.join(t, "sweeps", "three_d_stability")
         t1_cmd = [BINARY, "sweep", TD_T1_SWEEP, "--out", cls.td_t1, "--quiet"]
         t1 = subprocess.Popen(t1_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # the ball on the block: a tiny sweep next to the paper sweep (discovered) in the
+        # background, a run with fields given with --ball-block-fields
+        cls.bb = os.path.join(t, "sweeps", "ball_block")
+        cls.bb_fields = os.path.join(t, "other", "ball_block_fields")
+        with open(os.path.join(t, "ball_block.toml"), "w") as f:
+            f.write(BB_SWEEP)
+        bb_cmd = [BINARY, "sweep", os.path.join(t, "ball_block.toml"), "--out", cls.bb,
+                  "--check", BB_GATES, "--quiet"]
+        bb = subprocess.Popen(bb_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        run([BINARY, "run", BB_CASE, "--out", cls.bb_fields, "--quiet", "--set", "time.end=1e-3",
+             "--set", "output.fields=[5e-4, 1e-3]"])
         run([BINARY, "stability", TD_CASE, "--set", "mesh=M1x2", "--set", "scheme=semi_explicit",
              "--set", "obstacles[0].friction=0", "--max-runs", "4", "--quiet",
              "--out", os.path.join(cls.td_stab, "semi_explicit_M1x2")], ok=(0, 4, 5))
@@ -539,6 +577,9 @@ class ReportSmoke(unittest.TestCase):
         out, err = t1.communicate(timeout=CALL_TIMEOUT)
         if t1.returncode != 0:
             raise AssertionError(f"{' '.join(t1_cmd)}: exit {t1.returncode}\n{out}\n{err}")
+        out, err = bb.communicate(timeout=CALL_TIMEOUT)
+        if bb.returncode not in (0, 4):
+            raise AssertionError(f"{' '.join(bb_cmd)}: exit {bb.returncode}\n{out}\n{err}")
         # 1: no accuracy / stability / verification / Kim–Kwak-type sources, default output
         # folder DIR/report
         run([PY, SCRIPT, cls.paper, "--no-discover", "--max-run-plots", "3"])
@@ -547,7 +588,8 @@ class ReportSmoke(unittest.TestCase):
         cls.out_full = os.path.join(t, "full_report")
         run([BINARY, "report", cls.paper, "--accuracy", cls.acc, "--stability", cls.stab,
              "--verification", cls.ver, "--kim-kwak-fields", cls.kk_fields,
-             "--long-runs", cls.long, "--three-d-fields", cls.td_fields, "--out", cls.out_full])
+             "--long-runs", cls.long, "--three-d-fields", cls.td_fields,
+             "--ball-block-fields", cls.bb_fields, "--out", cls.out_full])
 
     @classmethod
     def tearDownClass(cls):
@@ -605,6 +647,14 @@ class ReportSmoke(unittest.TestCase):
         for sid in ("td_bar", "td_oblique", "td_frame"):
             self.assertIn("cases/three_d/sweep.toml", section_html(page, sid))
         self.assertIn("build/ricochet sweep cases/three_d/table1.toml", section_html(page, "td_table1"))
+        self.assertIn("build/ricochet run cases/three_d/ball_block.toml",
+                      section_html(page, "bb_shapes"))
+        for sid in ("bb_histories", "bb_runs"):
+            self.assertIn("build/ricochet sweep cases/three_d/ball_block_sweep.toml",
+                          section_html(page, sid))
+            self.assertIn("--ball-block", section_html(page, sid))
+        self.assertIsNone(man["ball_block"])
+        self.assertIsNone(man["ball_block_fields"])
         self.assertIsNone(man["three_d_table1"])
         self.assertEqual(man["three_d_stability"], [])
         for sid in LONG_IDS:
@@ -671,7 +721,9 @@ class ReportSmoke(unittest.TestCase):
                           ("kk_interfaces", "kim_kwak_interfaces"),
                           ("long_runs", "long_runs_residual"),
                           ("td_shapes", "three_d_shapes"), ("td_bar", "three_d_bar"),
-                          ("td_table1", "three_d_table1")):
+                          ("td_table1", "three_d_table1"),
+                          ("bb_shapes", "ball_block_shapes"),
+                          ("bb_histories", "ball_block_histories")):
             self.assertIn(stem + ".png", by_id[sid]["files"], sid)
             self.assertTrue(by_id[sid]["runs"], sid)
             sec = section_html(page, sid)
@@ -813,6 +865,41 @@ class ReportSmoke(unittest.TestCase):
         self.assertIn("single runs", cap)    # no --repeat
         self.assertIn("three-dimensions.md#the-3d-table-1", cap)
         self.assertIn("ricochet sweep cases/three_d/table1_fast.toml", cap)
+
+    def test_ball_block(self):
+        """The ball on the block: the discovered tiny sweep, the given fields run; one history
+        run per scheme (the case's settings), the runs table's frame updates and momentum
+        deviation recomputed from summary.csv and history.csv, the gate line."""
+        man, page = self.check_files(self.out_full)
+        self.assertEqual(man["ball_block"], os.path.abspath(self.bb))
+        self.assertEqual(man["ball_block_fields"], os.path.abspath(self.bb_fields))
+        by_id = {s["id"]: s for s in man["sections"]}
+        self.assertEqual(by_id["bb_histories"]["runs"], ["semi/000-contact.frame_updates=10",
+                                                         "implicit/000", "penalty/000"])
+        self.assertEqual(by_id["bb_shapes"]["runs"], [os.path.abspath(self.bb_fields)])
+        # two field times (0.5 and 1 ms, each at the nearest step), both bodies drawn
+        cap = section_html(page, "bb_shapes")
+        self.assertRegex(cap, r"\(0\.\d+, 1\.?\d* ms; fields/\*\.vtu\)")
+        self.assertRegex(cap, r"ball [\d.e+-]+ Pa, block [\d.e+-]+ Pa")
+        parser = Tables()
+        parser.feed(page)
+        table = parser.tables["tab-bb_runs"]
+        rows = read_csv(os.path.join(self.bb, "summary.csv"))
+        self.assertEqual([r[0] for r in table], [r["run_id"] for r in rows])
+        frames = {"semi/000-contact.frame_updates=10": "10",
+                  "semi/001-contact.frame_updates=0": "0 (frozen frame)", "implicit/000": "1",
+                  "penalty/000": "– (penalty)"}
+        for r in table:
+            self.assertEqual(r[2], frames[r[0]], r)
+            h = history_columns(os.path.join(self.bb, "runs", r[0], "history.csv"),
+                                [f"momentum_{c}" for c in "xyz"])
+            dev = max(abs(v - col[0]) for col in h.values() for v in col)
+            self.assertEqual(r[7], fmt_g(dev, 2), r)
+            self.assertLess(dev, 1e-14, r)
+        sec = section_html(page, "bb_runs")
+        self.assertIn("ci/gates/ball_block_fast.toml", sec)
+        self.assertRegex(sec, r"\d+ passed, 0 failed")
+        self.assertIn("three-dimensions.md#the-ball-on-the-block", sec)
 
     def test_tables_have_expected_rows(self):
         with open(os.path.join(self.out_full, "index.html")) as f:

@@ -68,9 +68,11 @@ const std::vector<Script>& scripts() {
         {"--three-d-fields", "FIELDS_DIR", "run folder of cases/three_d/oblique_block.toml with fields/*.vtu"},
         {"--three-d-table1", "TDT1_DIR", "3D Table 1 sweep folder (cases/three_d/table1.toml or table1_fast.toml)"},
         {"--three-d-stability", "TDS_DIR", "folder of ricochet stability results of the 3D meshes (subfolders with stability.json)"},
+        {"--ball-block", "BB_DIR", "sweep folder of the 3D ball on a block (cases/three_d/ball_block_sweep.toml or ball_block_fast.toml)"},
+        {"--ball-block-fields", "BBF_DIR", "run folder of cases/three_d/ball_block.toml with fields"},
         {"--out", "OUT", "report folder (default DIR/report)"},
         {"--max-run-plots", "N", "draw the histories of at most N runs (default 30)"},
-        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, oblique_block/, three_d_table1/ and three_d_stability/ next to DIR"},
+        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, oblique_block/, three_d_table1/, three_d_stability/, ball_block/ and ball_block_fields/ next to DIR"},
         {"-h, --help", "", "the script's help"}}},
       {"plot", "plot_run.py",
        "one PNG of a run's history (docs/report.md): RUN_DIR/history.png; runs reports/plot_run.py "
