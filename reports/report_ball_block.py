@@ -96,14 +96,14 @@ def _coarsest(runs):
 
 def pick_scheme_runs(runs):
     """One ok run per scheme with a history, on the case's mesh: the semi-explicit scheme with
-    ten frame updates at 0.9 x the critical step, the implicit scheme with one frame update,
+    ten frame updates at 0.9 x the critical step, the implicit scheme with frame updates,
     the penalty scheme with the soft constraint (the case's settings); else the first of the
     scheme."""
     coarsest = _coarsest(runs)
     prefer = {
         "semi_explicit": lambda r: (frame_updates(r) == 10 and r.num("dt_safety") is not None
                                     and abs(r.num("dt_safety") - 0.9) < 1e-9),
-        "implicit": lambda r: frame_updates(r) == 1,
+        "implicit": lambda r: (frame_updates(r) or 0) > 0,
         "explicit_penalty": soft,
     }
     picked = []

@@ -187,7 +187,7 @@ cross = {{ "contact.frame_updates" = [10, 0] }}
 
 [[group]]
 name = "implicit"
-set = {{ scheme = "implicit", "time.dt" = 1e-4, "contact.frame_updates" = 1 }}
+set = {{ scheme = "implicit", "time.dt" = 1e-4, "contact.frame_updates" = 10 }}
 
 [[group]]
 name = "penalty"
@@ -887,7 +887,7 @@ class ReportSmoke(unittest.TestCase):
         rows = read_csv(os.path.join(self.bb, "summary.csv"))
         self.assertEqual([r[0] for r in table], [r["run_id"] for r in rows])
         frames = {"semi/000-contact.frame_updates=10": "10",
-                  "semi/001-contact.frame_updates=0": "0 (frozen frame)", "implicit/000": "1",
+                  "semi/001-contact.frame_updates=0": "0 (frozen frame)", "implicit/000": "10",
                   "penalty/000": "– (penalty)"}
         for r in table:
             self.assertEqual(r[2], frames[r[0]], r)
