@@ -94,15 +94,20 @@ namespace {
 // dt t . v_rel,free), so that x_free + the current reactions' share is the gap at those
 // positions. A rigid plane's frame does not change; a curved obstacle's or a master body's
 // does, by the square of the step's correction.
+// Out of line: the frozen-frame step (frame_updates = 0) compiles as it did without it, so
+// its floating-point contractions and results stay those of the paper's scheme bit for bit.
 template <class M, class Predicted, class VFree>
-void update_frames(const M& model, const std::vector<ObstacleOf<M>>& obstacles, BipotentialContactT<M::kDim>& b,
+[[gnu::noinline]] void update_frames(const M& model, const std::vector<ObstacleOf<M>>& obstacles, BipotentialContactT<M::kDim>& b,
                    const State& s, const Predicted& predicted, const VFree& v_free) {
   constexpr int D = M::kDim;
   using Vec = VecD<D>;
   using Local = typename Space<D>::Local;
   ContactSetT<D>& c = b.set;
   const double dt = s.dt, dt_n = velocity_step(s);
-  const unsigned mark = b.mark;
+  // The nodes whose node_reaction is current: those of the active contacts' stencils.
+  const unsigned mark = ++b.mark;
+  for (int k : c.active)
+    for (int j = 0; j < c.stencil[k].count; ++j) b.node_mark[c.stencil[k].node[j]] = mark;
   auto corrected = [&](int j) -> Vec {
     const Vec x = predicted(j);
     return b.node_mark[j] == mark ? Vec(x + (dt * dt_n / model.mass[D * j]) * b.node_reaction[j]) : x;
@@ -172,7 +177,6 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
   auto predicted = [&](int j) -> Vec { return model.ref.col(j) + s.u.segment<D>(D * j) + dt * v_free(j); };
   update_boxes(c, predicted);
   begin_step(c);
-  const unsigned mark = ++b.mark;
   // Broad phase: only boundary nodes whose free motion ends behind an obstacle (or inside a
   // master body) at t+dt. Gap and frame at the predicted position, frozen for the step.
   for (int k = 0; k < static_cast<int>(c.candidates.size()); ++k) {
@@ -195,7 +199,6 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
       st.factor[j] = st.coef[j] * wj;
       w += st.coef[j] * st.factor[j];
       b.node_reaction[node].setZero();
-      b.node_mark[node] = mark;
     }
     b.x_free[k] = position ? Local{oc.gap, dt * f.tangential(v_rel)} : f.local(v_rel);
     b.weight[k] = w;
