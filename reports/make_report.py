@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The report of a sweep: for any sweep its runs (with the gate results), work-precision
 diagrams per error metric, each run's history and the runs that failed; for the paper's sweep
-(cases/paper_table1.toml) also Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside
+(cases/paper/table1.toml) also Table 1 and Figs. 1-7 of Cros, Feng & Magnain (2010), ours beside
 the paper's numbers, with the accuracy sweep, the stability map, the stability envelope and the
 long runs (report_stability.py), penetration over time, the verification cases, the
 Kim–Kwak-type problem and the 3D cases (report_three_d.py).
@@ -20,7 +20,7 @@ Kim–Kwak-type problem and the 3D cases (report_three_d.py).
 
 DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's sweep when it is
            named paper_table1 or has the groups table1, penalty and friction.
---accuracy a finished sweep of cases/accuracy.toml (the paper report's work-precision diagrams).
+--accuracy a finished sweep of cases/accuracy/accuracy.toml (the paper report's work-precision diagrams).
 --stability stability.json files, or folders searched for them (stability map).
 --verification a finished sweep of cases/verification/sweep.toml (the verification cases, each
            against its analytic reference: report_verification.py). Without it, DIR itself
@@ -29,7 +29,7 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            and its gates: report_kim_kwak.py). Without it, DIR itself when its runs are that case.
 --kim-kwak-fields a run of cases/kim_kwak/rubber_groove.toml with its fields/*.vtu (the
            deformed shapes of the Kim–Kwak-type problem).
---envelope a finished sweep of cases/envelope/envelope.toml (the stability envelope: largest
+--envelope a finished sweep of cases/envelope/sweep_full.toml (the stability envelope: largest
            stable step / estimate per parameter and scheme, the points where the automatic step
            is not stable, the remedy runs: report_stability.py). Without it, DIR itself when it
            is such a sweep (stability searches with `stable_over_estimate`).
@@ -37,16 +37,16 @@ DIR        a finished sweep (summary.csv, sweep.json, runs/). It is the paper's 
            refinement sweep cases/three_d/refinement.toml and a run of
            cases/three_d/oblique_block.toml with fields (the 3D part: report_three_d.py). Without
            --three-d, DIR itself when its runs are the 3D cases.
---three-d-table1, --three-d-stability  the sweep of cases/three_d/table1.toml (or
+--three-d-table1, --three-d-stability  the sweep of cases/three_d_table1/sweep_full.toml (or
            table1_fast.toml: Table 1 in 3D) and a folder of `ricochet stability` results of the
            3D meshes (subfolders with stability.json). Without --three-d-table1, DIR itself when
            it is that sweep.
---ball-block, --ball-block-fields  the sweep of cases/three_d/ball_block_sweep.toml (or
-           ball_block_fast.toml) and a run of cases/three_d/ball_block.toml with fields (the
+--ball-block, --ball-block-fields  the sweep of cases/ball_block/sweep_full.toml (or
+           ball_block_fast.toml) and a run of cases/ball_block/ball_block.toml with fields (the
            Mooney–Rivlin ball on a free block, in the 3D part: report_ball_block.py). Without
            --ball-block, DIR itself when its runs are that case.
 --long-runs a finished sweep of cases/long_runs/sweep.toml with the drift.csv of
-           reports/long_runs.py (energy residual per scene and scheme, the drift table). Without
+           cases/long_runs/drift.py (energy residual per scene and scheme, the drift table). Without
            it, DIR itself when it holds a drift.csv.
 --out      report folder (default DIR/report).
 --max-run-plots N  draw the histories of at most N runs (default 30).
@@ -97,8 +97,8 @@ from report_io import (REPO, REFERENCE_TOML, Sweep, field_files, find_stability_
 
 FIG1_TIMES = [5e-4, 1e-3, 2e-3, 3e-3]
 FIG2_TIME = 6e-4
-PAPER_CMD = "build/ricochet sweep cases/paper_table1.toml --out results/paper"
-ACC_CMD = "build/ricochet sweep cases/accuracy.toml --out results/accuracy"
+PAPER_CMD = "build/ricochet sweep cases/paper/table1.toml --out results/paper"
+ACC_CMD = "build/ricochet sweep cases/accuracy/accuracy.toml --out results/accuracy"
 STAB_CMD = ("build/ricochet stability cases/oblique_plate.toml --set mesh=M1 "
             "--set scheme=semi_explicit --out results/stability/semi_explicit_M1")
 STAB_MORE = ("(and likewise for mesh M2 and the schemes `implicit`, with `--energy-bound 1`, and "
@@ -828,7 +828,7 @@ PAPER_GROUPS = {"table1", "penalty", "friction"}
 
 
 def is_paper_sweep(sweep):
-    """The paper's sweep (cases/paper_table1.toml): its name, or its three groups."""
+    """The paper's sweep (cases/paper/table1.toml): its name, or its three groups."""
     return sweep.name == "paper_table1" or PAPER_GROUPS <= {r.group for r in sweep.runs}
 
 
@@ -1067,7 +1067,7 @@ def discover_ball_block(main_dir, args, found=None):
 
 
 def is_three_d_table1(sweep, cases):
-    """The sweep of cases/three_d/table1.toml (or table1_fast.toml): its name, or the groups
+    """The sweep of cases/three_d_table1/sweep_full.toml (or table1_fast.toml): its name, or the groups
     table1 and penalty on the oblique block."""
     return (sweep.name.startswith("three_d_table1")
             or ({"table1", "penalty"} <= {r.group for r in sweep.runs} and cases == {"oblique_block"}))
@@ -1210,7 +1210,7 @@ def generic_sources(main_sweep, args):
 def main(argv=None):
     ap = OneLineParser(prog="make_report.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("dir", help="a finished sweep folder (summary.csv, sweep.json, runs/)")
-    ap.add_argument("--accuracy", help="accuracy sweep folder (cases/accuracy.toml)")
+    ap.add_argument("--accuracy", help="accuracy sweep folder (cases/accuracy/accuracy.toml)")
     ap.add_argument("--stability", nargs="*", default=None,
                     help="stability.json files or folders holding them")
     ap.add_argument("--verification", metavar="VER_DIR",
@@ -1220,10 +1220,10 @@ def main(argv=None):
     ap.add_argument("--kim-kwak-fields", metavar="FIELDS_DIR",
                     help="run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu")
     ap.add_argument("--envelope", metavar="ENV_DIR",
-                    help="stability-envelope sweep folder (cases/envelope/envelope.toml)")
+                    help="stability-envelope sweep folder (cases/envelope/sweep_full.toml)")
     ap.add_argument("--long-runs", metavar="LONG_DIR",
                     help="long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv "
-                         "(reports/long_runs.py)")
+                         "(cases/long_runs/drift.py)")
     ap.add_argument("--three-d", metavar="TD_DIR",
                     help="3D sweep folder (cases/three_d/sweep.toml)")
     ap.add_argument("--three-d-refinement", metavar="TDR_DIR",
@@ -1231,15 +1231,15 @@ def main(argv=None):
     ap.add_argument("--three-d-fields", metavar="FIELDS_DIR",
                     help="run folder of cases/three_d/oblique_block.toml with fields/*.vtu")
     ap.add_argument("--three-d-table1", metavar="TDT1_DIR",
-                    help="3D Table 1 sweep folder (cases/three_d/table1.toml or table1_fast.toml)")
+                    help="3D Table 1 sweep folder (cases/three_d_table1/sweep_full.toml or table1_fast.toml)")
     ap.add_argument("--three-d-stability", metavar="TDS_DIR",
                     help="folder of ricochet stability results of the 3D meshes (subfolders "
                          "with stability.json)")
     ap.add_argument("--ball-block", metavar="BB_DIR",
                     help="sweep folder of the ball on the block "
-                         "(cases/three_d/ball_block_sweep.toml)")
+                         "(cases/ball_block/sweep_full.toml)")
     ap.add_argument("--ball-block-fields", metavar="FIELDS_DIR",
-                    help="run folder of cases/three_d/ball_block.toml with fields/*.vtu")
+                    help="run folder of cases/ball_block/ball_block.toml with fields/*.vtu")
     ap.add_argument("--out", help="report folder (default DIR/report)")
     ap.add_argument("--max-run-plots", type=int, default=RG.MAX_RUN_PLOTS, metavar="N",
                     help=f"draw the histories of at most N runs (default {RG.MAX_RUN_PLOTS})")

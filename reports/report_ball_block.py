@@ -1,11 +1,11 @@
 """The report's sections on the Mooney–Rivlin ball striking a free Mooney–Rivlin block
-(cases/three_d/ball_block.toml; docs/three-dimensions.md, The ball on the block), in the 3D part
+(cases/ball_block/ball_block.toml; docs/three-dimensions.md, The ball on the block), in the 3D part
 (report_three_d.py), from two sources:
 
-  * the sweep of cases/three_d/ball_block_sweep.toml (or ball_block_fast.toml): the histories of
+  * the sweep of cases/ball_block/sweep_full.toml (or ball_block_fast.toml): the histories of
     one run per scheme (energy error, normal contact force, deviation of the total momentum from
     its value at t = 0) and a table of every run with the gate result;
-  * a run of cases/three_d/ball_block.toml with its fields: the deformed ball and block at each
+  * a run of cases/ball_block/ball_block.toml with its fields: the deformed ball and block at each
     field time, drawn from their boundary faces with matplotlib.
 
 A source that is missing gives "not available" sections with the command that produces it.
@@ -28,12 +28,12 @@ CASE = "ball_block"
 CASE_FILE = os.path.join("cases", "three_d", "ball_block.toml")
 SWEEP_FILE = os.path.join("cases", "three_d", "ball_block_sweep.toml")
 GATES_FILE = os.path.join("ci", "gates", "ball_block.toml")
-BB_CMD = ("build/ricochet sweep cases/three_d/ball_block_sweep.toml --out results/ball_block "
-          "--check ci/gates/ball_block.toml")
-FIELDS_CMD = "build/ricochet run cases/three_d/ball_block.toml --out results/ball_block_fields"
+BB_CMD = ("build/ricochet sweep cases/ball_block/sweep_full.toml --out results/ball_block "
+          "--check cases/ball_block/gates_full.toml")
+FIELDS_CMD = "build/ricochet run cases/ball_block/ball_block.toml --out results/ball_block_fields"
 ANCHOR = "#the-ball-on-the-block"
 TITLE = "Mooney–Rivlin ball on a free block (3D)"
-ENERGY_BOUND = 0.02          # ci/gates/ball_block_common.toml, "energy error below 2 %"
+ENERGY_BOUND = 0.02          # cases/ball_block/gates_common.toml, "energy error below 2 %"
 MOMENTUM_TOLERANCE = 1e-14   # the same file: each component of the final momentum, kg m/s
 EPS = np.finfo(float).eps
 
@@ -405,7 +405,7 @@ def _status(r):
 def _gates_file(sw):
     """The gate file the sweep was checked with: ci/gates/<name>.toml of the gate set's name in
     its gates-junit.xml (ball_block, ball_block_fast), else of its sweep file's name
-    (ball_block_sweep.toml: ball_block.toml), else ci/gates/ball_block.toml."""
+    (ball_block_sweep.toml: ball_block.toml), else cases/ball_block/gates_full.toml."""
     names = []
     try:
         names.append(ET.parse(os.path.join(sw.dir, "gates-junit.xml")).getroot().get("name"))
@@ -470,7 +470,7 @@ def sec_runs(ctx, Section, sid, title):
     cmd = _sweep_command(sw)
     gates, failed = RK.gates_result(sw.dir)
     gates_file = _gates_file(sw)
-    gate_line = (f"**Gates** (`{gates_file}` with `ci/gates/ball_block_common.toml`, "
+    gate_line = (f"**Gates** (`{gates_file}` with `cases/ball_block/gates_common.toml`, "
                  f"`gates-junit.xml` of the sweep): {gates}"
                  + (" — failed: " + "; ".join(failed) if failed else "") + "."
                  if gates else

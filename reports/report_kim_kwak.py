@@ -1,6 +1,6 @@
 """The report's Kim–Kwak-type part: the rubber ball, rubber block, V groove and bump of
 cases/kim_kwak/rubber_groove.toml (docs/kim-kwak-type.md). No closed-form answer exists, so the
-part shows the motion and what the gates of ci/gates/kim_kwak.toml check, from two sources:
+part shows the motion and what the gates of cases/kim_kwak/gates.toml check, from two sources:
 
   * the sweep of cases/kim_kwak/sweep.toml (five runs: semi-explicit at two steps, implicit,
     explicit penalty with and without the soft constraint): a figure of every run's energy
@@ -25,7 +25,7 @@ from report_io import (REPO, field_files, fmt_dt, fmt_g, read_case, read_vtu,
                        resolve_case_file, scheme_name)
 
 KK_CMD = ("build/ricochet sweep cases/kim_kwak/sweep.toml --out results/kim_kwak "
-          "--check ci/gates/kim_kwak.toml")
+          "--check cases/kim_kwak/gates.toml")
 FIELDS_CMD = "build/ricochet run cases/kim_kwak/rubber_groove.toml --out results/rubber_groove"
 CASE = "rubber_groove"
 CASE_FILE = os.path.join("cases", "kim_kwak", "rubber_groove.toml")

@@ -1,15 +1,15 @@
 """The report's stability-envelope and long-run parts (docs/report.md, Stability envelope and
 Long runs), built by make_report.py from two sweeps:
 
-* the stability envelope, a finished sweep of cases/envelope/envelope.toml (docs/stability.md):
+* the stability envelope, a finished sweep of cases/envelope/sweep_full.toml (docs/stability.md):
   one row per stability search (`kind` = `stability`: `stable_dt`, `unstable_dt`,
   `estimate_dt`, `stable_over_estimate`, `outcome`, `unstable_reason`) and the remedy runs
   (`kind` = `run`). Two sections: the envelope figure (largest stable step / estimate against
   each parameter, per scheme) with a table of counts per group, and the table of the points
   where the default automatic step is not stable, with the remedy runs;
 * the long runs, a finished sweep of cases/long_runs/sweep.toml with the DIR/drift.csv that
-  reports/long_runs.py writes. Two sections: the energy residual R / E_ref against the step
-  (the residual of reports/long_runs.py, imported, not copied), one panel per scene, and the
+  cases/long_runs/drift.py writes. Two sections: the energy residual R / E_ref against the step
+  (the residual of cases/long_runs/drift.py, imported, not copied), one panel per scene, and the
   drift.csv table.
 
 Each section is "not available", with the command that produces its data, when its source is
@@ -31,10 +31,10 @@ import report_figures as F
 from report_io import (Sweep, fmt_dt, fmt_g, fnum, read_case, read_stability,
                        resolve_case_file, same, scheme_name, show_path)
 
-ENV_CMD = ("build/ricochet sweep cases/envelope/envelope.toml --out results/envelope "
-           "--jobs 2 --check ci/gates/envelope.toml")
+ENV_CMD = ("build/ricochet sweep cases/envelope/sweep_full.toml --out results/envelope "
+           "--jobs 2 --check cases/envelope/gates_full.toml")
 LONG_SWEEP_CMD = "build/ricochet sweep cases/long_runs/sweep.toml --out results/long_runs --jobs 2"
-LONG_DRIFT_CMD = "/usr/bin/python3 reports/long_runs.py results/long_runs"
+LONG_DRIFT_CMD = "/usr/bin/python3 cases/long_runs/drift.py results/long_runs"
 LONG_CMD = f"{LONG_SWEEP_CMD}`, then `{LONG_DRIFT_CMD}"
 SAFETY = 0.9          # time.safety's default: the automatic step is 0.9 x the estimate
 SCHEMES = ("semi_explicit", "explicit_penalty", "implicit")
@@ -473,7 +473,7 @@ def envelope_sections(ctx, Section):
     fig.caption = (
         "Each point is one `ricochet stability` search of the sweep, every row with `kind` = "
         "`stability` and `status` = `ok` (docs/stability.md: bisection over whole runs; "
-        "cases/envelope/envelope.toml searches the oblique plate on M1 with energy bound 1, so "
+        "cases/envelope/sweep_full.toml searches the oblique plate on M1 with energy bound 1, so "
         "that only a blow-up, an inverted element or energy growth counts as unstable): the "
         "largest stable fixed Δt over the estimate min L_e/c_p (`stable_over_estimate` of "
         "summary.csv), on a log scale. One column per scheme, one row per parameter family; "
@@ -573,7 +573,7 @@ def envelope_sections(ctx, Section):
 # Long runs
 
 def read_drift(folder):
-    """DIR/drift.csv as a list of dicts (reports/long_runs.py), or None."""
+    """DIR/drift.csv as a list of dicts (cases/long_runs/drift.py), or None."""
     path = os.path.join(folder, "drift.csv")
     try:
         with open(path, newline="") as f:
@@ -586,13 +586,13 @@ def read_drift(folder):
 def _residual_fn():
     try:
         from long_runs import residual
-    except ImportError as e:   # reports/long_runs.py missing
+    except ImportError as e:   # cases/long_runs/drift.py missing
         return None, str(e)
     return residual, None
 
 
 def _drift_units():
-    """{column: (unit, meaning)} of drift.csv, from reports/long_runs.py's COLUMNS."""
+    """{column: (unit, meaning)} of drift.csv, from cases/long_runs/drift.py's COLUMNS."""
     try:
         from long_runs import COLUMNS
     except ImportError:
@@ -666,14 +666,14 @@ def long_run_sections(ctx, Section):
     fig.runs = used
     if residual is None:
         fig.available = False
-        fig.missing = f"reports/long_runs.py cannot be imported ({imp_err})."
+        fig.missing = f"cases/long_runs/drift.py cannot be imported ({imp_err})."
     elif not panels:
         fig.available = False
         fig.missing = (f"no ok run with a history.csv in {lr.dir}. Run `{LONG_SWEEP_CMD}`.")
     else:
         fig.files = F.fig_long_runs(ctx["out"], "long_runs_residual", panels)  # PNG only: dense
         fig.caption = (
-            "The energy residual R / E_ref of reports/long_runs.py (its `residual`, imported) "
+            "The energy residual R / E_ref of cases/long_runs/drift.py (its `residual`, imported) "
             "against the time step n = t / Δt: for the bi-potential schemes R = E_t + D − E₀ − "
             "W_ext − W_cn, for the explicit penalty scheme R = E_t + E_pen + D − E₀ − W_ext, "
             "with E_t the bodies' energy (`total_energy`), D the friction dissipation, W_ext "
@@ -755,7 +755,7 @@ def long_run_sections(ctx, Section):
         notes.append(f"most chatter {g(chat, 'status_changes_per_step')} status changes per "
                      f"step (`{chat['run_id']}`)")
     tab.caption = (
-        "One row per run of drift.csv (reports/long_runs.py; columns in docs/stability.md, Long "
+        "One row per run of drift.csv (cases/long_runs/drift.py; columns in docs/stability.md, Long "
         "runs): the drift is the least-squares slope of R / E_ref (the figure above) against "
         "the step, × 1e5; max |R| / E_ref its largest size; `energy_error_max` the paper's "
         "energy error (summary.json), which also counts the energy that position-level contact "

@@ -7,10 +7,10 @@
   * the sweep of cases/three_d/refinement.toml: the same comparison on refined meshes;
   * a run of cases/three_d/oblique_block.toml with its fields: the deformed block at each field
     time, drawn from its boundary faces with matplotlib;
-  * the sweep of cases/three_d/table1.toml (or table1_fast.toml), the paper's Table 1 in 3D: wall
+  * the sweep of cases/three_d_table1/sweep_full.toml (or table1_fast.toml), the paper's Table 1 in 3D: wall
     time and energy error per mesh x dt x scheme, with the penalty runs at their automatic step,
     and `ricochet stability` results of the 3D meshes beside them.
-  * the sweep of cases/three_d/ball_block_sweep.toml and a run of cases/three_d/ball_block.toml
+  * the sweep of cases/ball_block/sweep_full.toml and a run of cases/ball_block/ball_block.toml
     with its fields: the Mooney-Rivlin ball striking a free Mooney-Rivlin block
     (report_ball_block.py).
 
@@ -31,12 +31,12 @@ from report_io import (REPO, field_files, fmt_dt, fmt_g, read_vtu, resolve_case_
                        scheme_name, show_path)
 
 SWEEP_CMD = ("build/ricochet sweep cases/three_d/sweep.toml --out results/three_d "
-             "--check ci/gates/three_d.toml")
+             "--check cases/three_d/gates.toml")
 REF_CMD = ("build/ricochet sweep cases/three_d/refinement.toml --out results/three_d_refinement "
            "--threads 1")
 FIELDS_CMD = ("build/ricochet run cases/three_d/oblique_block.toml --set obstacles[0].friction=0.1 "
               "--out results/oblique_block")
-T1_CMD = ("build/ricochet sweep cases/three_d/table1.toml --out results/three_d_table1 "
+T1_CMD = ("build/ricochet sweep cases/three_d_table1/sweep_full.toml --out results/three_d_table1 "
           "--repeat 3")
 STAB_CMD = ("build/ricochet stability cases/three_d/oblique_block.toml --set mesh=M1x2 "
             "--set scheme=semi_explicit --set obstacles[0].friction=0 "
@@ -287,7 +287,7 @@ def sec_bar(ctx, Section, sid, title):
         "LS-DYNA's default f_si = 0.1 delay each wave front by ρcA/k = 6 µs, so their contact "
         "lasts longer, as in 2D; at f_si = 1 the delay is 0.6 µs. The implicit scheme runs at "
         "a fixed Δt = 1e-7 s. The table gives the gated "
-        "quantities (`ci/gates/three_d.toml`: 2 %). Runs: "
+        "quantities (`cases/three_d/gates.toml`: 2 %). Runs: "
         + ", ".join(f"`{r.id}`" for r in runs) + f" of `{sw.dir}`.")
     return s
 
@@ -404,7 +404,7 @@ def sec_frame(ctx, Section, sid, title):
         "The oblique block (μ = 0.1) and the same case with `[scene_rotation]` 50° about "
         "(1, 2, −1.5): every position, velocity and the plane turned. The energies, the "
         "dissipation and the contact time do not depend on the frame; the gates "
-        "(`ci/gates/three_d.toml`) hold them to 1e-9. The differences are round-off: the turned "
+        "(`cases/three_d/gates.toml`) hold them to 1e-9. The differences are round-off: the turned "
         "run's contact tangents are other vectors of the same tangent planes; the implicit "
         "scheme's, about 1e-11, are its Newton tolerance, met in each frame on its own. "
         f"Sweep `{sw.dir}`.")
@@ -412,7 +412,7 @@ def sec_frame(ctx, Section, sid, title):
 
 
 # ---------------------------------------------------------------------------------------------
-# Table 1 in 3D (cases/three_d/table1.toml)
+# Table 1 in 3D (cases/three_d_table1/sweep_full.toml)
 
 T1_SCHEMES = (("semi_explicit", "Semi-explicit"), ("implicit", "Implicit"))
 MESH_MARKERS = ("o", "s", "^", "D")
@@ -490,7 +490,7 @@ def _t1_command(sw):
     """The command that wrote the sweep, from its sweep.json."""
     m = sw.meta
     f = m.get("sweep_file")
-    cmd = "ricochet sweep " + (show_path(f) if f else "cases/three_d/table1.toml") + \
+    cmd = "ricochet sweep " + (show_path(f) if f else "cases/three_d_table1/sweep_full.toml") + \
         f" --out {show_path(sw.dir)}"
     if isinstance(m.get("jobs"), int) and m["jobs"] != 1:
         cmd += f" --jobs {m['jobs']}"
@@ -597,7 +597,7 @@ def sec_table1(ctx, Section, sid, title):
         s.available = False
         s.missing = ((f"the sweep could not be read ({err}). " if err else
                       "no three_d_table1 sweep. ")
-                     + f"Run `{T1_CMD}` (or cases/three_d/table1_fast.toml; results/three_d_table1, "
+                     + f"Run `{T1_CMD}` (or cases/three_d_table1/sweep_fast.toml; results/three_d_table1, "
                      "found next to the main sweep, or `--three-d-table1`).")
         return s
     runs = [r for r in sw.find(group="table1") if r.scheme in dict(T1_SCHEMES)]
@@ -605,7 +605,7 @@ def sec_table1(ctx, Section, sid, title):
     if not runs:
         s.available = False
         s.missing = (f"no run of the group `table1` in `{sw.dir}` (not a sweep of "
-                     f"cases/three_d/table1.toml?). Run `{T1_CMD}`.")
+                     f"cases/three_d_table1/sweep_full.toml?). Run `{T1_CMD}`.")
         return s
     cols = _t1_columns(runs)
     hdr = [f"{m}, Δt = {fmt_dt(d)} s" for m, d in cols]

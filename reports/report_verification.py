@@ -33,7 +33,7 @@ from report_io import REPO, fmt_dt, scheme_name
 
 REFERENCE_VER = os.path.join(REPO, "reference", "verification.toml")
 VER_CMD = ("build/ricochet sweep cases/verification/sweep.toml --out results/verification "
-           "--check ci/gates/verification.toml")
+           "--check cases/verification/gates_fast.toml")
 PART_TITLE = "Verification cases: analytic reference against the three schemes"
 SCHEMES = ("semi_explicit", "implicit", "explicit_penalty")
 
@@ -346,7 +346,7 @@ CASES = [
         groups=("disk", "disk_implicit"),
         notes=("The level plane with μ = 0.3 (groups `disk`, `disk_implicit`). The frictionless "
                "and cone-edge groups of the sweep are gated on exact momentum conservation "
-               "(ci/gates/verification.toml) and not repeated here."),
+               "(cases/verification/gates_fast.toml) and not repeated here."),
         pending=("the case `disk_oblique` (cases/verification/, history column "
                  "`angular_momentum`, reference/verification.toml [disk_oblique]) is being "
                  "added; its reference keys are read as `impulse_ratio` (else `mu`) and "

@@ -74,7 +74,7 @@ TEST(FuzzEntries, AcceptsTheRepositoryFilesAndRejectsGarbage) {
   EXPECT_FALSE(fuzz::csv_entry("a,b\n1\n"));
   // Gates: on the built-in table, or on the table after "%%csv" (the gate fails there: still accepted).
   const std::string gate = "[[gate]]\nname = \"g\"\nkind = \"max\"\ncolumn = \"v\"\nlimit = 1.0\n";
-  EXPECT_TRUE(fuzz::gates_entry(contents(fs::path(RICOCHET_SOURCE_DIR) / "ci/gates/verification.toml")));
+  EXPECT_TRUE(fuzz::gates_entry(contents(fs::path(RICOCHET_SOURCE_DIR) / "cases/verification/gates_fast.toml")));
   EXPECT_TRUE(fuzz::gates_entry(gate + "%%csv\nv\n2\n"));
   EXPECT_TRUE(fuzz::gates_entry(gate + "%%csv\r\n"));
   EXPECT_FALSE(fuzz::gates_entry(gate + "%%csvx\nv\n2\n"));  // not the separator: TOML syntax error

@@ -374,7 +374,7 @@ std::string write_case(const std::string& name, const std::string& plane,
   std::filesystem::create_directories(dir);
   const std::filesystem::path file = dir / (name + ".toml");
   std::ofstream out(file);
-  // A cantilever clamped on its left edge, set in motion by a uniform initial velocity (the cases/cantilever_gravity.toml setup, shorter and coarser).
+  // A cantilever clamped on its left edge, set in motion by a uniform initial velocity (the cases/examples/cantilever_gravity.toml setup, shorter and coarser).
   out << "name = \"" << name << "\"\nplane = \"" << plane << "\"\nmesh = \"beam\"\n"
       << "\n"
       << "[meshes.beam]\ngenerator = \"rectangle\"\nwidth = 0.2\nheight = 0.02\nnx = 20\nny = 2\n\n"

@@ -1,6 +1,6 @@
 // The Kim-Kwak-type problem cases/kim_kwak/rubber_groove.toml (docs/kim-kwak-type.md): a
 // Blatz-Ko ball strikes a Mooney-Rivlin block in a rigid V groove (polyline) with a bump
-// (circle), mu = 0.3 everywhere. The sweep's gates (ci/gates/kim_kwak.toml) check the energy,
+// (circle), mu = 0.3 everywhere. The sweep's gates (cases/kim_kwak/gates.toml) check the energy,
 // the penetration and the friction from summary.csv; this test checks from the history that the
 // bodies do what the case says, in all three schemes: the ball is stopped and thrown back by
 // the block (contact between the bodies), the block is shoved along the floor, trips over the
@@ -99,7 +99,7 @@ TEST(KimKwak, VariableStepStaysStableWhereTheFixedStepDiverges) {
   // safety 0.96 up it does); the step recomputed every 10 steps from the current
   // configuration (time.dt_update_interval = 10) at the same safety runs to the end, its step
   // shrinking to 0.84 of the first, with the energy error and penetration of the default run
-  // (measured 1.25 %, 7.4e-5 m; the gates' bounds 2 % and 2e-4 m, ci/gates/kim_kwak.toml).
+  // (measured 1.25 %, 7.4e-5 m; the gates' bounds 2 % and 2e-4 m, cases/kim_kwak/gates.toml).
   const auto run = [](const std::vector<std::string>& extra) {
     std::vector<std::string> sets = {"output.fields=[]", "time.safety=1.0"};
     sets.insert(sets.end(), extra.begin(), extra.end());

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""reports/long_runs.py on synthetic long-run sweeps: the energy residual closes the balance
+"""cases/long_runs/drift.py on synthetic long-run sweeps: the energy residual closes the balance
 with the contact's work (bi-potential) or the springs' energy (penalty); a planted linear drift
 comes out as its slope per 1e5 steps; the ball's apexes are counted per flight, not per
 vibration; the blocks' creep; a failed run gives an empty row; a missing summary.csv is a

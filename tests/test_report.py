@@ -2,7 +2,7 @@
 """Smoke test of reports/make_report.py on tiny sweeps (registered with CTest as report_smoke).
 
 Builds, in a temporary folder and with the given ricochet binary:
-  * a tiny paper sweep: the groups of cases/paper_table1.toml (table1, penalty, friction) on the
+  * a tiny paper sweep: the groups of cases/paper/table1.toml (table1, penalty, friction) on the
     oblique plate with coarse meshes (M1 4 x 8, M2 6 x 14 cells), all the paper's Δt;
   * a tiny accuracy sweep (two schemes, a reference run each, one diverged run);
   * two stability searches (semi-explicit bracketed, implicit up to the cap);
@@ -13,12 +13,12 @@ Builds, in a temporary folder and with the given ricochet binary:
     background while the other sweeps run), placed next to the paper sweep so that the report
     discovers it, and one run of cases/kim_kwak/rubber_groove.toml with its fields;
   * a tiny sweep of the Mooney–Rivlin ball on a free block (BB_SWEEP: the groups of
-    cases/three_d/ball_block_fast.toml for 1 ms, ~8 s, in the background) checked with
-    ci/gates/ball_block_fast.toml, next to the paper sweep (discovered), and a 1 ms run of
-    cases/three_d/ball_block.toml with fields (given with --ball-block-fields);
+    cases/ball_block/sweep_fast.toml for 1 ms, ~8 s, in the background) checked with
+    cases/ball_block/gates_fast.toml, next to the paper sweep (discovered), and a 1 ms run of
+    cases/ball_block/ball_block.toml with fields (given with --ball-block-fields);
   * a synthetic stability-envelope sweep (a summary.csv of searches and remedy runs, ENV_ROWS)
     next to the paper sweep (discovered), and a tiny long-run sweep (two scenes, 0.03 s each, a
-    failed row added) with its drift.csv written by reports/long_runs.py (given with
+    failed row added) with its drift.csv written by cases/long_runs/drift.py (given with
     --long-runs).
 Then runs the report twice: without the accuracy, stability, verification, Kim–Kwak-type,
 envelope and long-run sources (those sections must say "not available" and how to produce
@@ -173,7 +173,7 @@ TD_GATES = os.path.join(REPO, "ci", "gates", "three_d.toml")
 TD_CASE = os.path.join(REPO, "cases", "three_d", "oblique_block.toml")
 BB_CASE = os.path.join(REPO, "cases", "three_d", "ball_block.toml")
 BB_GATES = os.path.join(REPO, "ci", "gates", "ball_block_fast.toml")
-# The groups of cases/three_d/ball_block_fast.toml for 1 ms (the ball touches the block at
+# The groups of cases/ball_block/sweep_fast.toml for 1 ms (the ball touches the block at
 # 0.24 ms): semi-explicit with and without frame updates, implicit, penalty with the soft
 # constraint.
 BB_SWEEP = f"""
@@ -198,7 +198,7 @@ LONG_IDS = ("long_runs", "long_runs_table")         # and the long-run sweep wit
 LONG_RUNS_PY = os.path.join(REPO, "reports", "long_runs.py")
 
 # A tiny long-run sweep (cases/long_runs/sweep.toml's scenes, 0.03 s each, ~500 steps); the test
-# adds a failed row to its summary.csv and writes drift.csv with reports/long_runs.py.
+# adds a failed row to its summary.csv and writes drift.csv with cases/long_runs/drift.py.
 LONG_SWEEP = f"""
 name = "tiny_long_runs"
 
@@ -216,7 +216,7 @@ cross = {{ scheme = ["semi_explicit", "implicit"] }}
 """
 LONG_FAILED = "ball_bouncing/000-scheme=semi_explicit"   # a failed row, no run folder
 
-# A synthetic stability-envelope sweep (the summary.csv of cases/envelope/envelope.toml, few
+# A synthetic stability-envelope sweep (the summary.csv of cases/envelope/sweep_full.toml, few
 # rows): (run id, kind, status, scheme, overrides, outcome, stable/estimate, unsafe). The automatic
 # step is 0.9 x the estimate: unsafe = stable/estimate < 0.9 or no stable step at all.
 V = {1: "[0.514496, -0.857493]", 5: "[2.57248, -4.28746]", 20: "[10.2899, -17.1499]",
@@ -633,7 +633,7 @@ class ReportSmoke(unittest.TestCase):
             sec = section_html(page, sid)
             self.assertIn("not-available", sec)
             self.assertIn("build/ricochet", sec)  # how to produce it
-        self.assertIn("cases/accuracy.toml", section_html(page, "work_precision"))
+        self.assertIn("cases/accuracy/accuracy.toml", section_html(page, "work_precision"))
         self.assertIn("ricochet stability", section_html(page, "stability").replace(
             "build/ricochet stability", "ricochet stability"))
         self.assertIn("cases/verification/sweep.toml", section_html(page, "verification"))
@@ -641,16 +641,16 @@ class ReportSmoke(unittest.TestCase):
         for sid in ("kk_histories", "kk_interfaces", "kk_runs"):
             self.assertIn("cases/kim_kwak/sweep.toml", section_html(page, sid))
         for sid in ENV_IDS:
-            self.assertIn("cases/envelope/envelope.toml", section_html(page, sid))
+            self.assertIn("cases/envelope/sweep_full.toml", section_html(page, sid))
             self.assertIn("--envelope", section_html(page, sid))
         self.assertIn("cases/three_d/oblique_block.toml", section_html(page, "td_shapes"))
         for sid in ("td_bar", "td_oblique", "td_frame"):
             self.assertIn("cases/three_d/sweep.toml", section_html(page, sid))
-        self.assertIn("build/ricochet sweep cases/three_d/table1.toml", section_html(page, "td_table1"))
-        self.assertIn("build/ricochet run cases/three_d/ball_block.toml",
+        self.assertIn("build/ricochet sweep cases/three_d_table1/sweep_full.toml", section_html(page, "td_table1"))
+        self.assertIn("build/ricochet run cases/ball_block/ball_block.toml",
                       section_html(page, "bb_shapes"))
         for sid in ("bb_histories", "bb_runs"):
-            self.assertIn("build/ricochet sweep cases/three_d/ball_block_sweep.toml",
+            self.assertIn("build/ricochet sweep cases/ball_block/sweep_full.toml",
                           section_html(page, sid))
             self.assertIn("--ball-block", section_html(page, sid))
         self.assertIsNone(man["ball_block"])
@@ -659,7 +659,7 @@ class ReportSmoke(unittest.TestCase):
         self.assertEqual(man["three_d_stability"], [])
         for sid in LONG_IDS:
             self.assertIn("cases/long_runs/sweep.toml", section_html(page, sid))
-            self.assertIn("reports/long_runs.py", section_html(page, sid))
+            self.assertIn("cases/long_runs/drift.py", section_html(page, sid))
         self.assertIsNone(man["envelope"])
         self.assertIsNone(man["long_runs"])
         self.assertFalse([s for s in by_id if s.startswith("ver_")])
@@ -864,7 +864,7 @@ class ReportSmoke(unittest.TestCase):
         cap = cap[cap.index("<figcaption>"):cap.index("</figcaption>")]
         self.assertIn("single runs", cap)    # no --repeat
         self.assertIn("three-dimensions.md#the-3d-table-1", cap)
-        self.assertIn("ricochet sweep cases/three_d/table1_fast.toml", cap)
+        self.assertIn("ricochet sweep cases/three_d_table1/sweep_fast.toml", cap)
 
     def test_ball_block(self):
         """The ball on the block: the discovered tiny sweep, the given fields run; one history
@@ -897,7 +897,7 @@ class ReportSmoke(unittest.TestCase):
             self.assertEqual(r[7], fmt_g(dev, 2), r)
             self.assertLess(dev, 1e-14, r)
         sec = section_html(page, "bb_runs")
-        self.assertIn("ci/gates/ball_block_fast.toml", sec)
+        self.assertIn("cases/ball_block/gates_fast.toml", sec)
         self.assertRegex(sec, r"\d+ passed, 0 failed")
         self.assertIn("three-dimensions.md#the-ball-on-the-block", sec)
 
@@ -1116,7 +1116,7 @@ class ReportSmoke(unittest.TestCase):
         self.assertTrue(fig.available, fig.missing)
         self.assertGreater(os.path.getsize(os.path.join(out, fig.files[0])), 1000)
         self.assertFalse(tab.available)
-        self.assertIn(f"reports/long_runs.py {nodrift}", tab.missing)
+        self.assertIn(f"cases/long_runs/drift.py {nodrift}", tab.missing)
         failed_only = os.path.join(self.tmp, "env_failed")
         os.makedirs(failed_only, exist_ok=True)
         with open(os.path.join(self.env, "summary.csv"), newline="") as f:

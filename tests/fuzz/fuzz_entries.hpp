@@ -32,12 +32,13 @@
 namespace ricochet::fuzz {
 
 // Where the inputs "live": a case's mesh files resolve against tests/data (which holds .msh
-// files), a gate file's includes against ci/gates (which holds verification_common.toml).
+// files), a gate file's includes against the verification study's folder (which holds
+// gates_common.toml).
 // Neither file exists; only its folder matters.
 inline const std::string kCaseFile = RICOCHET_SOURCE_DIR "/tests/data/fuzz-case.toml";
 inline const std::string kMeshFile = "fuzz-mesh.msh";
 inline const std::string kCsvFile = "fuzz-table.csv";
-inline const std::string kGatesFile = RICOCHET_SOURCE_DIR "/ci/gates/fuzz-gates.toml";
+inline const std::string kGatesFile = RICOCHET_SOURCE_DIR "/cases/verification/fuzz-gates.toml";
 
 inline std::string_view as_text(const std::uint8_t* data, std::size_t size) {
   return {reinterpret_cast<const char*>(data), size};

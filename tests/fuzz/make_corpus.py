@@ -14,9 +14,11 @@ build-fuzz/. Sources (docs/reliability.md, Fuzzing):
   tests/data;
 - gmsh: tests/data/*.msh;
 - csv: a few hand-made tables (quotes, CRLF, byte-order mark, nan/inf), and the summary.csv and
-  history.csv files that ci/test's sweeps wrote under BUILD_DIR (default build/), if any;
-- gates: ci/gates/*.toml (and the integer variant, as for cases), and each one followed by "%%csv" and the summary.csv of the sweep
-  that ci/test checks with it, when that exists.
+  history.csv files that ci/test's fast-tier studies wrote under BUILD_DIR/studies-fast (default
+  build/), if any;
+- gates: every gate file of a study (cases/*/gates*.toml; and the integer variant, as for cases),
+  and each one followed by "%%csv" and the summary.csv of the study's sweep it gates in the fast
+  tier (docs/studies.md), when that exists.
 """
 import pathlib
 import re
@@ -191,7 +193,8 @@ node_set = "bottom"
     seed("csv", "hand-quotes.csv", 'run,"a,b","say ""hi"""\nx,1,"two\nlines"\ny,,"""\n')
     seed("csv", "hand-crlf-bom.csv", "\ufeffname,value\r\nalpha,1e-06\r\n\r\nbeta,-inf\r\ngamma,nan\r")
     seed("csv", "hand-numbers.csv", "x,y,z\n 0.000001 ,+2.5,1e999\n-3,inf,\t-0\t\n")
-    csvs = sorted(build.glob("ci-*/summary.csv")) + sorted(build.glob("ci-*/runs/*/history.csv"))[:6]
+    fast = build / "studies-fast"
+    csvs = sorted(fast.glob("*/*/summary.csv")) + sorted(fast.glob("*/*/runs/*/*/history.csv"))[:6]
     for f in csvs:
         lines = f.read_text().splitlines(keepends=True)[:40]  # a few rows are enough
         seed("csv", str(f.relative_to(build)), "".join(lines))
@@ -201,22 +204,24 @@ node_set = "bottom"
     # ---- gates ----
     gate_words = {"keys": set(), "tables": set(), "arrays": set(), "words": set()}
     summaries = {}
-    for m in re.finditer(r"--out (\S+) .*--check (ci/gates/\S+\.toml)", (ROOT / "ci/test").read_text()):
-        s = ROOT / m.group(1) / "summary.csv"
-        s = build / s.relative_to(ROOT / "build") if m.group(1).startswith("build/") else s
-        summaries[m.group(2)] = s
-    for f in sorted((ROOT / "ci/gates").glob("*.toml")):
+    for study in sorted((ROOT / "cases").glob("*/study.toml")):
+        for entry in tomllib.loads(study.read_text()).get("sweep", []):
+            if "gates" in entry and "fast" in entry.get("tier", ["fast", "full"]):
+                gates = (study.parent / entry["gates"]).relative_to(ROOT)
+                summaries[str(gates)] = fast / study.parent.name / entry["name"] / "summary.csv"
+    for f in sorted((ROOT / "cases").glob("*/gates*.toml")):
         text = f.read_text()
         keys_of(tomllib.loads(text), gate_words)
-        seed("gates", f.name, strip_comments(text))
+        name = f.parent.name + "-" + f.name
+        seed("gates", name, strip_comments(text))
         if integral(strip_comments(text)) != strip_comments(text):
-            seed("gates", "int-" + f.name, integral(strip_comments(text)))
+            seed("gates", "int-" + name, integral(strip_comments(text)))
         s = summaries.get(str(f.relative_to(ROOT)))
         if s and s.is_file():
-            seed("gates", f.stem + "-with-table.toml", strip_comments(text) + "%%csv\n" + s.read_text())
+            seed("gates", f.parent.name + "-" + f.stem + "-with-table.toml", strip_comments(text) + "%%csv\n" + s.read_text())
     gates_dict = set(gate_words["keys"]) | {f'"{w}"' for w in gate_words["words"]}
     gates_dict |= {"[[gate]]", "kind", '"max"', '"min"', '"near"', '"ratio"', '"count"', '"pattern"',
-                   "%%csv\n", "include", "verification_common.toml", "9223372036854775807", "1e308", "nan", "inf"}
+                   "%%csv\n", "include", "gates_common.toml", "9223372036854775807", "1e308", "nan", "inf"}
     write_dict(out / "gates.dict", gates_dict)
 
     print("make_corpus: " + ", ".join(f"{t} {n} seeds" for t, n in count.items()) + f" in {out / 'seeds'}")
