@@ -577,11 +577,11 @@ set = { "bodies[0].thickness" = 2.0 }
   EXPECT_EQ(run(changed, 1, 1, true).executed, 4u);
 }
 
-// The threads of each child run (its summary.json, and the table's `threads` column): 1 when runs
-// run in parallel, all cores one at a time, --threads when given, the sweep file's `threads` over
-// the parallel default. Threads are not part of a run's identity: a sweep resumed with other
-// threads reuses its finished runs.
-TEST_F(SweepTest, ChildRunsGetOneThreadWhenRunsRunInParallel) {
+// The threads of each child run (its summary.json, and the table's `threads` column): 1 by
+// default, in parallel or one at a time, --threads when given, the sweep file's `threads` over
+// the default. Threads are not part of a run's identity: a sweep resumed with other threads
+// reuses its finished runs.
+TEST_F(SweepTest, ChildRunsGetOneThreadUnlessTheSweepSaysOtherwise) {
   const std::string sweep = R"(
 base = "case.toml"
 [[group]]
@@ -611,12 +611,14 @@ cross = { "time.dt" = [1e-5, 2e-5, 4e-5] }
   EXPECT_EQ(run(sweep, 2, 1, false, RICOCHET_BINARY, 2).executed, 0u);
 
   ASSERT_EQ(run(sweep, 1, 1, true).executed, 3u);
+  expect_threads(1);
+  ASSERT_EQ(run(sweep, 1, 1, true, RICOCHET_BINARY, 0).executed, 3u);
   expect_threads(omp_get_num_procs());
   ASSERT_EQ(run(sweep, 2, 1, true, RICOCHET_BINARY, 2).executed, 3u);
   expect_threads(2);
   EXPECT_EQ(read_json_file(out() / "sweep.json").at("threads").get<int>(), 2);
 
-  // The sweep file's `threads` wins over the parallel default, and --threads over it.
+  // The sweep file's `threads` wins over the default, and --threads over it.
   const std::string with_threads = R"(
 base = "case.toml"
 set = { threads = 3 }

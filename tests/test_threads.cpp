@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <omp.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstring>
@@ -147,6 +149,7 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
     for (const int threads : {1, 2}) {
       PreparedCase pc = base;
       pc.settings.threads = threads;
+      pc.settings.adapt_threads = false;  // the count itself is under test, whatever the load
       omp_set_num_threads(5);
       std::vector<int> inside;
       results.push_back(run_case(pc, [&](long, long, double) { inside.push_back(omp_get_max_threads()); }));
@@ -179,4 +182,81 @@ TEST_F(Threads, DefaultRunUsesEveryCore) {
   fs::remove(file);
   EXPECT_EQ(pc.settings.threads, 0);
   EXPECT_EQ(run_case(pc).threads, omp_get_num_procs());
+}
+
+namespace {
+
+// `n` child processes that spin on a core each until the object goes: the "other processes
+// holding the cores" of a shared machine.
+class BusyProcesses {
+ public:
+  explicit BusyProcesses(int n) {
+    for (int i = 0; i < n; ++i) {
+      const pid_t pid = fork();
+      if (pid == 0) {
+        for (volatile unsigned long k = 0;; k = k + 1) {
+        }
+      }
+      if (pid > 0) pids_.push_back(pid);
+    }
+    usleep(50000);  // let the scheduler spread them
+  }
+  ~BusyProcesses() {
+    for (const pid_t pid : pids_) kill(pid, SIGKILL);
+    for (const pid_t pid : pids_) waitpid(pid, nullptr, 0);
+  }
+  std::size_t size() const { return pids_.size(); }
+
+ private:
+  std::vector<pid_t> pids_;
+};
+
+}  // namespace
+
+// Processes that never block are runnable at every look: each sample counts them all.
+TEST_F(Threads, OtherRunnableTasksCountsBusyProcesses) {
+  if (other_runnable_tasks({}) < 0) GTEST_SKIP() << "no /proc/loadavg: the count is not available here";
+  const BusyProcesses busy(2);
+  ASSERT_EQ(busy.size(), 2u);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_GE(other_runnable_tasks({}), 2);
+    usleep(2000);
+  }
+}
+
+// With a busy process on every core, an adapting run gives its second thread up (threads_min
+// = 1) and its results are those of the fixed counts bit for bit; a run with adapt_threads =
+// false keeps its two threads throughout.
+TEST_F(Threads, AdaptingRunGivesThreadsUpWhileOthersHoldTheCores) {
+  if (other_runnable_tasks({}) < 0) GTEST_SKIP() << "no /proc/loadavg: the count is not available here";
+  const fs::path file = fs::temp_directory_path() / ("ricochet_threads_adapt_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(file) << kCase;
+  const PreparedCase base = prepare_case(read_case(
+      file.string(), {"scheme=semi_explicit", "meshes.m.nx=64", "meshes.m.ny=20", "time.end=3e-4", "time.dt=2e-6"}));
+  fs::remove(file);
+  PreparedCase fixed = base;
+  fixed.settings.threads = 2;
+  fixed.settings.adapt_threads = false;
+  const RunResult reference = run_case(fixed);
+  ASSERT_EQ(reference.status, RunStatus::ok) << reference.reason;
+
+  const BusyProcesses busy(omp_get_num_procs());
+  PreparedCase adapting = base;
+  adapting.settings.threads = 2;
+  std::vector<int> inside;
+  const RunResult r = run_case(adapting, [&](long, long, double) { inside.push_back(omp_get_max_threads()); });
+  ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+  EXPECT_EQ(r.threads, 2);
+  EXPECT_EQ(r.threads_min, 1);
+  ASSERT_FALSE(inside.empty());
+  EXPECT_EQ(inside.front(), 1) << "the load is read before the first step";
+  ASSERT_EQ(r.history.values.size(), reference.history.values.size());
+  EXPECT_EQ(std::memcmp(r.history.values.data(), reference.history.values.data(),
+                        r.history.values.size() * sizeof(double)),
+            0);
+
+  std::vector<int> fixed_inside;
+  const RunResult f = run_case(fixed, [&](long, long, double) { fixed_inside.push_back(omp_get_max_threads()); });
+  EXPECT_EQ(f.threads_min, 2);
+  for (const int n : fixed_inside) EXPECT_EQ(n, 2);
 }

@@ -429,6 +429,7 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   c.scheme = scheme_from_name(root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"}));
   c.default_mesh = root.text("mesh", "");
   c.threads = static_cast<int>(root.integer("threads", 0, 0, kMaxThreads));
+  c.adapt_threads = root.boolean("adapt_threads", true);
 
   const std::filesystem::path dir = std::filesystem::path(file).parent_path();
   const auto meshes = root.table("meshes");

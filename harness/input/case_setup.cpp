@@ -532,6 +532,7 @@ void prepare_run(PreparedCase& p, M& model) {
   s.energy_growth_limit = c.energy_growth_limit;
   s.monitor_every = c.monitor_every;
   s.threads = c.threads;
+  s.adapt_threads = c.adapt_threads;
 
   std::map<int, std::string> prescribed_by;  // dof -> boundary key, to reject conflicts
   for (const BoundarySpec& b : c.boundaries) {

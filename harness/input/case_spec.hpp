@@ -216,6 +216,7 @@ struct CaseSpec {
   int monitor_every = 50;            // [steps]
 
   int threads = 0;  // OpenMP threads of the run: 0 = all cores, else 1 ... kMaxThreads (threads.hpp)
+  bool adapt_threads = true;  // fewer threads while other processes hold the cores (threads.hpp)
   RunLimits limits;
 };
 

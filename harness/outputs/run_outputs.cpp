@@ -266,6 +266,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     j["penalty_soft_dt"] = nullptr;
   }
   j["threads"] = r.threads;
+  j["threads_min"] = r.threads_min;
   j["wall_seconds"] = r.wall_seconds;
   j["cpu_seconds"] = r.cpu_seconds;
   j["element_steps_per_second"] = r.element_steps_per_second;

@@ -163,7 +163,6 @@ std::string SweepPlan::request(std::size_t i) const {
 
 std::optional<int> SweepPlan::threads(std::size_t i) const {
   if (options_.threads) return options_.threads;
-  if (options_.jobs <= 1) return std::nullopt;
   for (const SweepValue& v : runs_[i].overrides)
     if (v.key == "threads") return std::nullopt;
   return 1;

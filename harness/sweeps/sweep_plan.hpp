@@ -58,9 +58,9 @@ class SweepPlan {
   // its finished runs; each run's summary.json records the threads it used.
   std::string request(std::size_t i) const;
   // The `--threads` given to run i's `ricochet run`: the sweep's --threads if set; else 1 when
-  // runs run in parallel (--jobs > 1) and the run's overrides do not set `threads`; else none
-  // (the run's case decides: its `threads` key, from the sweep file or the base case, else all
-  // cores).
+  // the run's overrides (the sweep file's `set`, `cross`, `reference`) do not set `threads`:
+  // a sweep's runs are timed and compared, and one thread each keeps their timings from
+  // depending on what else holds the cores; else none (the sweep file's `threads` decides).
   std::optional<int> threads(std::size_t i) const;
 
   // The runs this invocation may read, run and table: every run, or with set_scope only the

@@ -16,9 +16,10 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
   constexpr int D = M::kDim;
   const auto& obstacles = obstacles_of(settings, model);
   // The whole run, set-up included, uses the run's thread count.
-  const ThreadScope threads(settings.threads);
+  ThreadScope threads(settings.threads, settings.adapt_threads);
   RunResult result;
   result.threads = threads.threads();
+  result.threads_min = threads.threads_min();
   State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement, settings.loads);
   // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
   // half of any contact impulse of the first step.
@@ -77,6 +78,7 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
     return true;
   };
   for (;;) {
+    threads.adapt();
     const long n = s.step;
     if (steps.variable()) monitor.plan_step(s, !steps.begin_step(s));
     const bool observe = monitor.is_monitor_step(n);
@@ -106,6 +108,7 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
   }
   monitor.finish(s);
   steps.report(result);
+  result.threads_min = threads.threads_min();
   return result;
 }
 

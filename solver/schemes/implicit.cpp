@@ -610,9 +610,10 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   if (settings.dt_update_interval != 0)
     throw std::invalid_argument("implicit scheme: the step is fixed (dt_update_interval must be 0)");
   // The whole run, the integrator's set-up included, uses the run's thread count.
-  const ThreadScope threads(settings.threads);
+  ThreadScope threads(settings.threads, settings.adapt_threads);
   RunResult result;
   result.threads = threads.threads();
+  result.threads_min = threads.threads_min();
   // A quasi-static start (relaxation.hpp): relaxed with the semi-explicit loop and the same
   // bi-potential contact law, the run starts from the relaxed displacement.
   result.relaxed = settings.relaxation.enabled;
@@ -636,6 +637,7 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
     return result;
   }
   for (;;) {
+    threads.adapt();
     const long n = s.step;
     // The Newton iterates' force passes are not states of the run: the converged state's
     // stresses come from a stress pass of their own.
@@ -656,6 +658,7 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
     }
   }
   monitor.finish(s);
+  result.threads_min = threads.threads_min();
   result.newton_iterations = integrator.newton_iterations_total();
   result.linear_iterations = integrator.linear_iterations_total();
   result.direct_solver = integrator.direct_solver();

@@ -71,6 +71,9 @@ struct RunSettings {
   // OpenMP threads of the run's element loops: 0 = every core, n >= 1 = n (threads.hpp,
   // resolve_threads). Results are the same for any count; only the time changes.
   int threads = 0;
+  // Fewer threads than `threads` while other processes hold the cores (threads.hpp,
+  // ThreadScope); false: always `threads`.
+  bool adapt_threads = true;
 
   // Rigid obstacles, with friction[b][o] the coefficient of body b against obstacle o. The
   // explicit loop treats contact by the bi-potential method (the semi-explicit scheme:
@@ -197,7 +200,8 @@ struct RunResult {
   long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
   bool direct_solver = false;      // implicit scheme: CHOLMOD Cholesky (true) or PCG (false)
   long factorizations = 0;         // implicit scheme, direct solver: numeric factorizations of A
-  int threads = 0;                 // threads the run used: resolve_threads(settings.threads)
+  int threads = 0;                 // threads the run may use: resolve_threads(settings.threads)
+  int threads_min = 0;             // the fewest it used (adapt_threads: others held the cores)
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time
   double element_steps_per_second = 0.0;
