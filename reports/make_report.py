@@ -94,9 +94,12 @@ def main(argv=None):
     ap.add_argument("--max-run-plots", type=int, default=30, metavar="N",
                     help="plug-ins draw the histories of at most N runs (default 30)")
     args = ap.parse_args(argv)
-    given = [x for x in (args.dir, args.study, args.index) if x]
-    if len(given) != 1:
-        ap.error("give one of DIR, --study STUDY_OUT, --index OUT")
+    named = [(t, x) for t, x in (("DIR", args.dir), ("--study", args.study),
+                                 ("--index", args.index)) if x]
+    if len(named) != 1:
+        ap.error((" and ".join(f"{t} {x}" for t, x in named) + ": " if named else "")
+                 + "give one of DIR, --study STUDY_OUT, --index OUT")
+    given = [x for _, x in named]
     if args.index and args.out:
         ap.error("--out does not go with --index (the index is OUT/index.html)")
     if args.max_run_plots < 0:

@@ -38,7 +38,9 @@ def runs_table(ctx, sec, sweep, sid):
     keys = swept_keys(sweep)
     cols = [c for c in as_list(sec.get("columns")) if c not in keys]
     gates = GatedColumns(sweep, ctx.gates_file(sec["sweep"]), ctx.sweep_entry(sec["sweep"]))
-    gated = [c for c in gates.columns if c not in cols and c not in keys]
+    # a gated column is shown when some gate on it has a verdict for a run of the table
+    gated = [c for c in gates.columns if c not in cols and c not in keys
+             and any(gates.mark(r, c) for r in runs)]
     s.header = ["run", "status"] + [f"`{k}`" for k in keys] + [f"`{c}`" for c in cols] + \
         [f"`{c}` (gated)" for c in gated]
     for r in runs:

@@ -158,7 +158,7 @@ def _manifest(page):
     for s in page["sections"]:
         man["sections"].append({
             "id": s.id, "number": s.number, "title": s.title, "kind": s.kind,
-            "paper": s.paper, "part": s.part, "case": s.case,
+            "reproduces": s.paper, "part": s.part, "case": s.case,
             "available": s.available and not s.error, "error": s.error,
             "missing": s.missing or None, "files": s.files, "runs": s.runs,
             "sources": s.sources, "text": s.caption if s.kind == "note" else None,
