@@ -21,6 +21,7 @@ import numpy as np
 
 import report_figures as F
 from report_io import fmt_dt, fmt_g, scheme_name
+from report_select import overrides
 
 # Units of the error columns of summary.csv (docs/sweeps.md): exact names first, then prefixes.
 METRIC_UNITS = {
@@ -304,19 +305,7 @@ def histories_section(ctx, sweep, Section, sid="histories"):
     return s
 
 
-def _overrides(sweep):
-    """run id -> {case key: value text} from sweep.json's run list."""
-    out = {}
-    for e in sweep.meta.get("runs", []) or []:
-        if not isinstance(e, dict):
-            continue
-        d = {}
-        for item in e.get("overrides", []) or []:
-            if isinstance(item, str) and "=" in item:
-                k, v = item.split("=", 1)
-                d[k.strip()] = v.strip()
-        out[e.get("id")] = d
-    return out
+_overrides = overrides   # run id -> {case key: value text} (report_select.py)
 
 
 def _series_names(runs, sweep):

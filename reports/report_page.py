@@ -84,6 +84,15 @@ def html_table(tid, header, rows):
     return "\n".join(out)
 
 
+def unavailable(sections, what, err, cmd):
+    """Marks the sections "not available": what is missing (and the error reading it), and the
+    command that makes it."""
+    for s in sections:
+        s.available = False
+        s.missing = what + (f" ({err})" if err else "") + f". Run `{cmd}`."
+    return sections
+
+
 def runs_text(ids):
     ids = list(ids)
     return ", ".join(f"`{i}`" for i in ids) if ids else "none"

@@ -17,7 +17,7 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
 from report_figures import SERIES_COLORS, color, plt, save
 from report_io import Sweep, fmt_dt, fmt_g, fnum, read_case, resolve_case_file, scheme_name
-from report_page import Section
+from report_page import Section, unavailable
 
 ENV_CMD = ("build/ricochet sweep cases/envelope/sweep_full.toml --out results/envelope "
            "--jobs 2 --check cases/envelope/gates_full.toml")
@@ -274,14 +274,6 @@ def _ratio_text(p):
     return fmt_g(p.ratio, 3) if p.ratio is not None else "–"
 
 
-def _unavailable(sections, what, err, cmd, option, folder):
-    """Marks the sections "not available", saying what is missing and the command that makes it."""
-    for s in sections:
-        s.available = False
-        s.missing = what + (f" ({err})" if err else "") + f". Run `{cmd}`."
-    return sections
-
-
 def envelope_sections(ctx, Section):
     """The envelope figure and the table of unsafe points, or two "not available" sections."""
     fig = Section("envelope", "Stability envelope: largest stable Δt / estimate against the "
@@ -290,8 +282,7 @@ def envelope_sections(ctx, Section):
                   "not stable, and the remedy runs (beyond the paper)", "table")
     env = ctx.get("env")
     if env is None:
-        return _unavailable([fig, tab], "no stability-envelope sweep", ctx.get("env_err"), ENV_CMD,
-                            "--envelope", "envelope")
+        return unavailable([fig, tab], "no stability-envelope sweep", ctx.get("env_err"), ENV_CMD)
     sw, points = env
     searches = [p for p in points if p.kind == "stability"]
     done = [p for p in searches if p.searched]

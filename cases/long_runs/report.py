@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 from report_figures import color, plt, save
 from report_io import fmt_dt, fmt_g, fnum, read_case, resolve_case_file, scheme_name
-from report_page import Section
+from report_page import Section, unavailable
 
 try:   # drift.py beside this file (the study folder is on sys.path while a plug-in imports)
     import drift as DRIFT
@@ -25,13 +25,6 @@ except ImportError:   # pragma: no cover - a study folder without drift.py
 
 def _short(run_id):
     return run_id.rsplit("/", 1)[-1]
-
-
-def _unavailable(sections, what, err, cmd):
-    for s in sections:
-        s.available = False
-        s.missing = what + (f" ({err})" if err else "") + f". Run `{cmd}`."
-    return sections
 
 
 LONG_SWEEP_CMD = "build/ricochet sweep cases/long_runs/sweep.toml --out results/long_runs --jobs 2"
@@ -52,7 +45,6 @@ DRIFT_FIXED = {"run_id", "group", "scheme", "status", "steps", "dt", "samples",
                "energy_drift_per_1e5_steps", "energy_drift_abs_per_1e5_steps", "penetration_max",
                "status_changes", "status_changes_per_step", "status_change_steps",
                "contact_steps"}
-
 
 
 def read_drift(folder):
@@ -105,7 +97,7 @@ def long_run_sections(ctx, Section):
                   "(beyond the paper)", "table")
     lr = ctx.get("long")
     if lr is None:
-        return _unavailable([fig, tab], "no long-run sweep", ctx.get("long_err"), LONG_CMD)
+        return unavailable([fig, tab], "no long-run sweep", ctx.get("long_err"), LONG_CMD)
     drift = read_drift(lr.dir)
     by_id = {d["run_id"]: d for d in drift or []}
 

@@ -6,22 +6,18 @@ docs/three-dimensions.md, Cases in 3D), from its three sweeps:
     beside the 2D plane-stress plate (a table of the 3D/2D ratios), and the frame invariance of
     the turned runs (a table of relative differences);
   * `refinement` (refinement.toml): the same comparison on refined meshes;
-  * `fields` (fields.toml): the oblique block with friction and its fields, the deformed block
-    at each field time, drawn from its boundary faces with matplotlib (report_fields.py).
+  * `fields` (fields.toml): the oblique block with friction and its fields, drawn by the
+    layout's `fields` kind (reports/report_fields.py).
 
 A sweep not run in the tier gives the page's "not run in this tier" note.
 """
 
-import json
 import math
 import os
 
-import numpy as np
-
-import report_fields as RF
 import report_figures as F
 from report_page import Section as PageSection
-from report_io import REPO, field_files, fmt_g, read_vtu, resolve_case_file, scheme_name
+from report_io import REPO, fmt_g, scheme_name
 
 SWEEP_CMD = ("build/ricochet sweep cases/three_d/sweep.toml --out results/three_d "
              "--check cases/three_d/gates.toml")
@@ -71,61 +67,6 @@ def _no_sweep(ctx, s, key="td", cmd=SWEEP_CMD, name="three_d"):
     s.available = False
     s.missing = ((f"the sweep could not be read ({err}). " if err else f"no {name} sweep. ")
                  + f"Run `{cmd}` (results/{name}, found next to the main sweep).")
-    return s
-
-
-def _fields_frames(folder):
-    """(the fields folder, [(time, vtu)] of at most MAX_PANELS field times) of a run folder."""
-    fdir = RF.find_fields(folder)
-    if fdir is None:
-        return None, []
-    files = field_files(fdir)
-    if len(files) > MAX_PANELS:
-        keep = np.unique(np.round(np.linspace(0, len(files) - 1, MAX_PANELS)).astype(int))
-        files = [files[i] for i in keep]
-    return fdir, [(t, read_vtu(p)) for t, p in files]
-
-
-def sec_shapes(ctx, Section, sid, title):
-    s = Section(sid, title, "figure")
-    folder = ctx.get("td_fields")
-    fdir, frames = _fields_frames(folder)
-    if not frames:
-        s.available = False
-        s.missing = ((f"no fields/*.vtu in `{folder}`. " if folder else
-                      "no run of the oblique block with fields. ")
-                     + f"Run `{FIELDS_CMD}` (results/oblique_block, found next to the main sweep).")
-        return s
-    if any("points3" not in v for _, v in frames):
-        s.available = False
-        s.missing = f"the fields in `{fdir}` are not 3D."
-        return s
-    run_dir = os.path.dirname(fdir) if os.path.basename(fdir) == "fields" else fdir
-    try:
-        with open(os.path.join(run_dir, "summary.json")) as f:
-            summ = json.load(f)
-    except (OSError, ValueError):
-        summ = {}
-    scheme = scheme_name(summ.get("scheme", "")) or "?"
-    mu = summ.get("friction_coeff")
-    run_title = (f"{summ.get('case', 'oblique_block')}, {scheme}, mesh {summ.get('mesh', '?')}"
-                 + (f", μ = {mu:g}" if isinstance(mu, (int, float)) else ""))
-    s.files = RF.fig_shapes_3d(ctx["out"], "three_d_shapes", frames, run_title)
-    s.runs = [run_dir]
-    s.sources = [fdir]
-    vm = [(t, float(np.max(v["cell_data"]["von_mises"]))) for t, v in frames
-          if "von_mises" in v["cell_data"]]
-    case_path = resolve_case_file(summ.get("case_file"))
-    s.caption = (
-        "The deformed block (true scale) drawn from its boundary faces, each coloured by its "
-        "cell's von Mises stress (the run's `stress_measure`, "
-        f"{summ.get('stress_measure', '?')}) on one scale, at each field time ("
-        + ", ".join(f"{t * 1e3:.3g}" for t, _ in frames) + " ms; fields/*.vtu), above the rigid "
-        "plane y = 0 (grey). The picture's vertical axis is the case's y. "
-        + (("Largest cell von Mises stress per instant: "
-            + ", ".join(f"{t * 1e3:.3g} ms: {fmt_g(m)} Pa" for t, m in vm) + ". ") if vm else "")
-        + f"Run: `{run_dir}` ({run_title}"
-        + (f"; case file `{os.path.relpath(case_path, REPO)}`" if case_path else "") + ").")
     return s
 
 
@@ -302,20 +243,12 @@ def sec_frame(ctx, Section, sid, title):
 
 
 # ---------------------------------------------------------------------------------------------
-# The plug-in's entries. args.refinement / args.fields: the names of those sweeps.
+# The plug-in's entries. args.refinement: the name of the refinement sweep.
 
 def _legacy(ctx, section):
     args = section.get("args", {})
-    fields = ctx.sweep(args.get("fields", "fields"))
     return {"out": ctx.out, "td": ctx.sweep(section["sweep"]),
-            "td_ref": ctx.sweep(args.get("refinement", "refinement")),
-            "td_fields": next((r.folder for r in fields.runs if RF.find_fields(r.folder)), None)
-            if fields else None}
-
-
-def shapes(ctx, section):
-    return [sec_shapes(_legacy(ctx, section), PageSection, "td_shapes",
-                       "The oblique block in 3D: deformed shapes")]
+            "td_ref": ctx.sweep(args.get("refinement", "refinement"))}
 
 
 def bar(ctx, section):
