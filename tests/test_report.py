@@ -57,8 +57,7 @@ TINY_SWEEP = """
 name = "tiny"
 description = "report smoke test: the oblique plate, coarse, 0.5 ms"
 base = "{base}"
-set = {{ mesh = "M1", "meshes.M1.nx" = 4, "meshes.M1.ny" = 8, "obstacles[0].friction" = 0.1,
-        "time.end" = 5e-4, "output.interval" = 2.5e-5, "output.fields" = [2.5e-4, 5e-4] }}
+set = {{ mesh = "M1", "meshes.M1.nx" = 4, "meshes.M1.ny" = 8, "obstacles[0].friction" = 0.1, "time.end" = 5e-4, "output.interval" = 2.5e-5, "output.fields" = [2.5e-4, 5e-4] }}
 
 [[group]]
 name = "runs"
@@ -80,6 +79,7 @@ kind = "max"
 column = "penetration_max"
 limit = 1e-30
 where = { scheme = "explicit_penalty" }
+allow_empty = true
 
 [[gate]]
 name = "wall time below an hour"
@@ -290,7 +290,7 @@ def setUpModule():
     write(os.path.join(study, "report.py"), PLUGIN)
     out = os.path.join(TMP, "out", "teststudy")
     run([BINARY, "sweep", os.path.join(study, "tiny.toml"), "--out", os.path.join(out, "tiny"),
-         "--quiet", "--check", os.path.join(study, "gates.toml")], ok=(0, 1))
+         "--quiet", "--check", os.path.join(study, "gates.toml")], ok=(0, 4))
     two_key_sweep(os.path.join(out, "two"))
     first = read_csv(os.path.join(out, "tiny", "summary.csv"))[0]["run_id"]
     write(os.path.join(out, "study.json"), json.dumps({
