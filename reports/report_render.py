@@ -21,7 +21,7 @@ h3{font-size:1.05em} h3.sec{font-size:1.2em;margin-top:1.6em}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .5em;vertical-align:top}
 th{background:#f0f0f0} td.diverged{background:#fdecea} td.nw{white-space:nowrap}
-td.nw code{word-break:normal}
+td.nw code,th code{word-break:normal;overflow-wrap:anywhere}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption,.caption{font-size:.9em;color:#333;margin-top:.4em}
 code{font-size:.85em;background:#f4f4f4;padding:0 .2em;word-break:break-all}
