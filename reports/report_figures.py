@@ -14,8 +14,7 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
-from matplotlib.ticker import (FixedLocator, FuncFormatter, LogLocator, NullLocator,  # noqa: E402
-                               ScalarFormatter)
+from matplotlib.ticker import FuncFormatter, ScalarFormatter  # noqa: E402
 from matplotlib.transforms import Bbox  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -363,17 +362,17 @@ def fig_penetration(outdir, stem, runs, floor=1e-24):
     return save(fig, outdir, stem)
 
 
-def fig_stability(outdir, stem, entries, table1_marks, table1_dts, dt_label="Table 1 Δt",
-                  mark_label="paper sweep run"):
-    """entries = [{mesh, scheme, estimate, lo, hi, outcome, cap}]; table1_marks =
+def fig_stability(outdir, stem, entries, marks, mark_dts, dt_label="Δt of the runs",
+                  mark_label="sweep run"):
+    """entries = [{mesh, scheme, estimate, lo, hi, outcome, cap}]; marks =
     [(mesh, scheme, dt, status)] from the sweep (the paper's: its Table 1 runs)."""
-    meshes = sorted({e["mesh"] for e in entries} | {m[0] for m in table1_marks})
+    meshes = sorted({e["mesh"] for e in entries} | {m[0] for m in marks})
     schemes = [s for s in ("semi_explicit", "implicit", "explicit_penalty")
                if any(e["scheme"] == s for e in entries)]
     schemes += sorted({e["scheme"] for e in entries} - set(schemes))
     fig, ax = plt.subplots(figsize=(8.5, 4.8))
     w = 0.8 / max(1, len(schemes))
-    for dt in table1_dts:
+    for dt in mark_dts:
         ax.axhline(dt, color="0.6", ls=":", lw=1.0, zorder=0)
         ax.text(len(meshes) - 0.45, dt, f" {dt_label} = {fmt_dt(dt)} s", va="center",
                 fontsize=7.5, color="0.35")
@@ -391,7 +390,7 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts, dt_label="Tab
                     transform=ax.get_xaxis_transform(), ha="center", fontsize=8, color=c)
         if e["hi"] is not None:
             ax.plot(x + w * 0.16, e["hi"], marker="x", ms=8, mew=2, color=c, ls="none")
-    for mesh, scheme, dt, status in table1_marks:
+    for mesh, scheme, dt, status in marks:
         if scheme not in schemes:
             continue
         i = meshes.index(mesh)
@@ -403,8 +402,8 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts, dt_label="Tab
     ax.set_xticklabels(meshes)
     ax.set_xlim(-0.5, len(meshes) - 0.5 + 0.55)
     ax.set_yscale("log")
-    lows = [e["estimate"] for e in entries if e["estimate"]] + list(table1_dts) + \
-        [m[2] for m in table1_marks if m[1] in schemes]
+    lows = [e["estimate"] for e in entries if e["estimate"]] + list(mark_dts) + \
+        [m[2] for m in marks if m[1] in schemes]
     if lows:
         ax.set_ylim(min(lows) / 5, None)
     ax.set_xlabel("mesh (numbers at the bottom: largest stable Δt / estimate)")
@@ -429,7 +428,7 @@ def fig_stability(outdir, stem, entries, table1_marks, table1_dts, dt_label="Tab
 
 
 # ---------------------------------------------------------------------------------------------
-# Verification cases (report_verification.py): the analytic reference beside every run
+# Line styles of several runs of one scheme
 
 def _styles(runs):
     """One (colour, line style) per run: the scheme's colour; a second run of the same scheme
@@ -456,142 +455,6 @@ def _running_mean(t, f, n):
         return t, f
     k = np.ones(n) / n
     return np.convolve(t, k, mode="valid"), np.convolve(f, k, mode="valid")
-
-
-def fig_ver_contact_force(outdir, stem, runs, force, duration, p_ref, ref_label, p_label,
-                          conserved=False):
-    """Top row: normal_force (kN) against time (µs), one panel per run (shared scale), with the
-    analytic plateau `force` for `duration`. Bottom: momentum_x of every run with p_ref(t) (or,
-    with conserved, each run's initial value)."""
-    import textwrap
-    n = len(runs)
-    fig = plt.figure(figsize=(max(10.5, 2.6 * n + 3.0), 6.8))
-    gs = fig.add_gridspec(2, n, height_ratios=[1.15, 1.0], hspace=0.5, wspace=0.08)
-    styles = _styles(runs)
-    top = []
-    alternating = False
-    fmax = 0.0
-    for j, ((label, r), st) in enumerate(zip(runs, styles)):
-        ax = fig.add_subplot(gs[0, j], sharey=top[0] if top else None)
-        top.append(ax)
-        h = r.history()
-        t, f = h["time"] * 1e6, h["normal_force"] / 1e3
-        fmax = max(fmax, float(np.nanmax(f)))
-        if force and duration:
-            tend = max(float(t[-1]), duration * 1e6)
-            ax.plot([0, duration * 1e6, duration * 1e6, tend], [force / 1e3] * 2 + [0, 0],
-                    color="k", ls="--", lw=1.3, zorder=3)
-        if _alternates(h["normal_force"]):
-            alternating = True
-            ax.plot(t, f, color=st["color"], lw=0.5, alpha=0.3)
-            tm, fm = _running_mean(t, f, 2)
-            ax.plot(tm, fm, color=st["color"], lw=1.5)
-        else:
-            ax.plot(t, f, color=st["color"], lw=1.5)
-        ax.set_title("\n".join(textwrap.wrap(label, 26)), fontsize=9)
-        ax.set_xlabel("time t (µs)")
-        if j == 0:
-            ax.set_ylabel("contact force normal_force (kN)")
-        else:
-            plt.setp(ax.get_yticklabels(), visible=False)
-    if force:
-        topv = min(fmax, 2.5 * force / 1e3) * 1.08
-        top[0].set_ylim(-0.04 * topv, topv)
-    handles = ([Line2D([0], [0], color="k", ls="--", lw=1.3, label=ref_label)]
-               if force and duration else [])
-    handles.append(Line2D([0], [0], color="0.3", lw=1.5, label="run: every sample"))
-    if alternating:
-        handles += [Line2D([0], [0], color="0.3", lw=0.5, alpha=0.4,
-                           label="every step (force alternating)"),
-                    Line2D([0], [0], color="0.3", lw=1.5, label="…its mean over 2 steps")]
-    top[-1].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.03, 1.0),
-                   frameon=False)
-    ax = fig.add_subplot(gs[1, :])
-    dmax, pmax = 0.0, 0.0
-    for (label, r), st in zip(runs, styles):
-        h = r.history()
-        p = h["momentum_x"]
-        if conserved:
-            # the change from the initial value: the value itself would need an offset label
-            d = p - p[0]
-            dmax, pmax = max(dmax, float(np.nanmax(np.abs(d)))), max(pmax, abs(float(p[0])))
-            ax.plot(h["time"] * 1e6, d, lw=1.4, label=label, **st)
-        else:
-            ax.plot(h["time"] * 1e6, p, lw=1.4, label=label, **st)
-    if conserved:
-        half = max(1.25 * dmax, 1e-6 * pmax, 1e-30)
-        ax.set_ylim(-half, half)
-        ax.axhline(0.0, color="k", lw=0.8, ls=":")
-    plain_axis(ax)
-    if p_ref is not None:
-        tt = np.linspace(0.0, max(float(r.history()["time"][-1]) for _, r in runs), 600)
-        pr = p_ref(tt)
-        if pr is not None:
-            ax.plot(tt * 1e6, pr, color="k", ls="--", lw=1.3, label=p_label)
-    ax.set_xlabel("time t (µs)")
-    ax.set_ylabel("change of total momentum_x,\n$p_x(t) − p_x(0)$ (kg·m/s)" if conserved
-                  else "momentum_x (kg·m/s)")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return save(fig, outdir, stem)
-
-
-def fig_ver_sliding(outdir, stem, series, v0, a, t_stop):
-    """series = [(label, run, t, v)]: velocity against time beside max(v0 - a t, 0), and the
-    difference from it (mm/s)."""
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
-    styles = _styles([(lab, r) for lab, r, _, _ in series])
-
-    def v_ref(t):
-        return np.maximum(v0 - a * t, 0.0)
-    tend = max(float(t[-1]) for _, _, t, _ in series)
-    tt = np.linspace(0.0, tend, 1000)
-    axes[0].plot(tt, v_ref(tt), color="k", ls="--", lw=1.6, zorder=20,
-                 label="analytic max(v₀ − μg t, 0)")
-    n = len(series)
-    for i, ((label, r, t, v), st) in enumerate(zip(series, styles)):
-        # the first runs on top: the penalty run's larger wiggles must not hide the others
-        axes[0].plot(t, v, lw=1.2, label=label, zorder=2 + n - i, **st)
-        axes[1].plot(t, 1e3 * (v - v_ref(t)), lw=0.9, label=label, zorder=2 + n - i, **st)
-    for ax in axes:
-        ax.axvline(t_stop, color="0.3", ls=":", lw=1.2)
-        ax.set_xlabel("time t (s)")
-        ax.set_xlim(0, tend)
-    axes[0].text(t_stop, 0.12 * v0, f" stop v₀/(μg)\n = {t_stop:.4g} s", fontsize=8,
-                 va="bottom", color="0.25")
-    axes[0].set_ylabel("velocity momentum_x / m (m/s)")
-    axes[0].set_title("centre-of-mass velocity")
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[1].axhline(0.0, color="k", lw=0.8)
-    axes[1].set_ylabel("momentum_x / m − analytic (mm/s)")
-    axes[1].set_title("difference from the analytic velocity")
-    axes[1].legend(loc="lower left", fontsize=8)
-    return save(fig, outdir, stem)
-
-
-def fig_ver_impulse(outdir, stem, runs, mu):
-    """The impulse path Δp_x against Δp_y (with |Δp_x| = μ Δp_y) and angular_momentum(t)."""
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
-    styles = _styles(runs)
-    ymax = 0.0
-    for (label, r), st in zip(runs, styles):
-        h = r.history()
-        dx, dy = h["momentum_x"] - h["momentum_x"][0], h["momentum_y"] - h["momentum_y"][0]
-        ymax = max(ymax, float(np.max(dy)))
-        axes[0].plot(dy, dx, lw=1.3, label=label, **st)
-        axes[1].plot(ms(h["time"]), h["angular_momentum"], lw=1.3, label=label, **st)
-    if mu and ymax > 0:
-        yy = np.array([0.0, ymax])
-        axes[0].plot(yy, mu * yy, color="k", ls="--", lw=1.2, label=f"|Δp_x| = μ Δp_y, μ = {mu:g}")
-        axes[0].plot(yy, -mu * yy, color="k", ls="--", lw=1.2)
-    axes[0].set_xlabel("normal impulse Δp_y (kg·m/s)")
-    axes[0].set_ylabel("tangential impulse Δp_x (kg·m/s)")
-    axes[0].set_title("impulse path")
-    axes[1].set_xlabel("time t (ms)")
-    axes[1].set_ylabel("angular_momentum (kg·m²/s)")
-    axes[1].set_title("spin")
-    for ax in axes:
-        ax.legend(loc="best", fontsize=8)
-    return save(fig, outdir, stem)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -969,154 +832,7 @@ def fig_work_precision(outdir, stem, panels, ylabel, xlabel, title, floor_label)
 
 
 # ---------------------------------------------------------------------------------------------
-# Stability envelope and long runs (report_stability.py)
+# Series colours beyond the schemes' own
 
 SERIES_COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
                  "#17becf", "#7f7f7f", "#bcbd22"]
-
-
-def fig_envelope(outdir, stem, rows, schemes, safety):
-    """The stability envelope: rows = [(title, x label, [x tick labels], [(series label,
-    [(x index, point)])])], each point with .scheme, .ratio (largest stable Δt / estimate) and
-    .outcome; one column per scheme (log y axis shared down the column), one row per parameter
-    family. Bracketed: filled circle; up to the cap: open up-triangle at the value; run limit:
-    open circle; no stable Δt: down-triangle in a band at the bottom. The automatic step
-    (safety × the estimate) is a dashed line, the region below it shaded."""
-    nr, nc = len(rows), len(schemes)
-    fig, axes = plt.subplots(nr, nc, figsize=(3.4 * nc + 2.5, 2.55 * nr + 0.8), squeeze=False,
-                             sharey="col")
-    # y range per column: every ratio drawn, the safety line and 1
-    for j, sc in enumerate(schemes):
-        vals = [p.ratio for _, _, _, ser in rows for _, pts in ser for _, p in pts
-                if p.scheme == sc and p.ratio is not None
-                and p.outcome != "no_stable_down_to_floor"]
-        lo = min(vals + [safety, 1.0])
-        hi = max(vals + [safety, 1.0])
-        axes[0][j].set_yscale("log")
-        # room at the bottom for the band of "no stable Δt"
-        axes[0][j].set_ylim(lo / 2.6, hi * 1.6)
-        # labelled ticks at 1, 2, 5 x 10^k over a narrow range, at the decades over a wide one
-        subs = (1.0, 2.0, 5.0) if hi / lo < 300 else (1.0,)
-        axes[0][j].yaxis.set_major_locator(LogLocator(base=10, subs=subs))
-        axes[0][j].yaxis.set_minor_locator(NullLocator())
-    for i, (title, xlabel, ticks, series) in enumerate(rows):
-        nser = max(1, len(series))
-        width = min(0.7, 0.16 * nser)
-        for j, sc in enumerate(schemes):
-            ax = axes[i][j]
-            ax.axhline(safety, color="k", ls="--", lw=1.1, zorder=2)
-            ax.axhline(1.0, color="0.55", ls=":", lw=0.9, zorder=2)
-            ax.axhspan(1e-12, safety, color="#d62728", alpha=0.06, lw=0, zorder=0)
-            ax.axhspan(1e-12, ax.get_ylim()[0] * 1.28, color="0.85", lw=0, zorder=1)
-            ax.set_xticks(range(len(ticks)))
-            ax.set_xticklabels(ticks)
-            ax.set_xlim(-0.6, len(ticks) - 0.4)
-            any_pt = False
-            for k, (label, pts) in enumerate(series):
-                c = SERIES_COLORS[k % len(SERIES_COLORS)]
-                off = (k - (nser - 1) / 2) * (width / max(1, nser - 1)) if nser > 1 else 0.0
-                mine = sorted([(x, p) for x, p in pts if p.scheme == sc], key=lambda t: t[0])
-                line = [(x + off, p.ratio) for x, p in mine
-                        if p.ratio is not None and p.outcome != "no_stable_down_to_floor"]
-                if len(line) > 1:
-                    ax.plot(*zip(*line), color=c, lw=0.9, alpha=0.55, zorder=3)
-                for x, p in mine:
-                    any_pt = True
-                    xo = x + off
-                    if p.outcome == "no_stable_down_to_floor":
-                        ax.plot(xo, ax.get_ylim()[0] * 1.13, marker="v", ms=6, color=c,
-                                ls="none", zorder=4, clip_on=False)
-                    elif p.ratio is None:
-                        continue
-                    elif p.outcome == "no_unstable_up_to_cap":
-                        ax.plot(xo, p.ratio, marker="^", ms=7, mfc="white", mec=c, mew=1.5,
-                                ls="none", zorder=4)
-                    elif p.outcome == "bracketed":
-                        ax.plot(xo, p.ratio, marker="o", ms=5.5, color=c, ls="none", zorder=4)
-                    else:
-                        ax.plot(xo, p.ratio, marker="o", ms=6, mfc="white", mec=c, mew=1.3,
-                                ls="none", zorder=4)
-            if not any_pt:
-                ax.text(0.5, 0.5, "no search of this scheme" + (
-                    "\n(the penalty scheme has no contact level)"
-                    if sc == "explicit_penalty" and "contact level" in title else ""),
-                    ha="center", va="center", transform=ax.transAxes, color="0.4", fontsize=8.5,
-                    bbox=dict(facecolor="white", edgecolor="none", alpha=0.9))
-            ax.set_title(title, fontsize=9)
-            if i == 0:   # the column's scheme, above its first panel
-                ax.text(0.5, 1.16, scheme_name(sc), transform=ax.transAxes, ha="center",
-                        va="bottom", fontsize=11.5, fontweight="bold", color=color(sc))
-            ax.set_xlabel(xlabel, fontsize=8.5)
-            ax.grid(True, which="major", axis="y", alpha=0.3)
-            ax.grid(False, axis="x")
-            if j == 0:
-                ax.set_ylabel("largest stable Δt / estimate")
-        handles = [Line2D([0], [0], color=SERIES_COLORS[k % len(SERIES_COLORS)], marker="o",
-                          ms=5.5, lw=0.9, label=lab) for k, (lab, _) in enumerate(series)]
-        axes[i][-1].legend(handles=handles, loc="center left", bbox_to_anchor=(1.03, 0.5),
-                           frameon=False, fontsize=8)
-    for ax in axes.flat:
-        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    outcomes = {p.outcome for _, _, _, ser in rows for _, pts in ser for _, p in pts}
-    handles = [Line2D([0], [0], marker="o", color="0.3", ls="none", ms=5.5, label="bracketed")]
-    if "no_unstable_up_to_cap" in outcomes:
-        handles.append(Line2D([0], [0], marker="^", mfc="white", mec="0.3", mew=1.5, ls="none",
-                              ms=7, label="stable up to the search cap (drawn at the cap)"))
-    if outcomes - {"bracketed", "no_unstable_up_to_cap", "no_stable_down_to_floor"}:
-        handles.append(Line2D([0], [0], marker="o", mfc="white", mec="0.3", mew=1.3, ls="none",
-                              ms=6, label="search stopped at its run limit (lower bound)"))
-    handles += [
-        Line2D([0], [0], marker="v", color="0.3", ls="none", ms=6,
-               label="no stable Δt down to the floor (grey band)"),
-        Line2D([0], [0], color="k", ls="--", lw=1.1,
-               label=f"automatic step: time.safety = {safety:g} × estimate"),
-        Line2D([0], [0], color="0.55", ls=":", lw=0.9, label="the estimate min L_e/c_p"),
-        Patch(facecolor="#d62728", alpha=0.12, label="automatic step not stable"),
-    ]
-    fig.tight_layout(h_pad=1.2, w_pad=0.8)
-    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
-               frameon=False, fontsize=8.5)
-    return save(fig, outdir, stem)
-
-
-def fig_long_runs(outdir, stem, panels):
-    """Long runs: panels = [(title, [(label, scheme, step numbers, R / E_ref)])]; one panel per
-    scene, a line per scheme, symmetric log y axis (linear within the smallest residual's
-    decade, shaded)."""
-    n = len(panels)
-    nc = 2 if n > 1 else 1
-    nr = (n + nc - 1) // nc
-    fig, axes = plt.subplots(nr, nc, figsize=(6.2 * nc, 3.9 * nr), squeeze=False)
-    for ax, (title, lines) in zip(axes.flat, panels):
-        peaks = [float(np.nanmax(np.abs(r))) for _, _, _, r in lines
-                 if np.isfinite(r).any() and np.nanmax(np.abs(r)) > 0]
-        lin = max(min(peaks) / 10, 1e-12) if peaks else 1e-12
-        for label, scheme, steps, r in lines:
-            ax.plot(steps, r, color=color(scheme), lw=0.8, label=label)
-        ax.set_yscale("symlog", linthresh=lin, linscale=1.0)
-        ax.axhspan(-lin, lin, color="0.9", lw=0, zorder=0)
-        ax.axhline(0.0, color="k", lw=0.6)
-        # ticks: 0 and ±10^k beyond the linear band, every other decade when there are many
-        y0, y1 = ax.get_ylim()
-        k0 = int(np.ceil(np.log10(3 * lin)))      # no tick crowding the 0 tick
-        k1 = int(np.ceil(np.log10(max(abs(y0), abs(y1), lin * 10))))
-        step = 1 if k1 - k0 <= 4 else 2
-        ks = list(range(k1, k0 - 1, -step))
-        ticks = [0.0] + [s * 10.0 ** k for k in ks for s in (1, -1)
-                         if (y0 <= s * 10.0 ** k <= y1)]
-        ax.yaxis.set_major_locator(FixedLocator(sorted(ticks)))
-        ax.yaxis.set_minor_locator(NullLocator())
-        ax.yaxis.set_major_formatter(FuncFormatter(
-            lambda v, _: "0" if v == 0 else
-            ("−" if v < 0 else "") + f"10$^{{{int(round(np.log10(abs(v))))}}}$"))
-        ax.set_title(title, fontsize=9.5)
-        ax.set_xlabel("time step n = t / Δt")
-        ax.set_ylabel(f"energy residual R / E_ref (–)\nsymlog, linear within ±{fmt_g(lin, 1)}",
-                      fontsize=8.5)
-        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}".replace(",", " ")))
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=1, frameon=False,
-                  fontsize=8)
-    for ax in list(axes.flat)[n:]:
-        ax.set_visible(False)
-    fig.tight_layout(h_pad=2.0)
-    return save(fig, outdir, stem, svg=False)   # 1e4 samples a line: no SVG

@@ -21,6 +21,7 @@ import numpy as np
 
 import report_figures as F
 from report_io import fmt_dt, fmt_g, scheme_name
+from report_select import overrides
 
 # Units of the error columns of summary.csv (docs/sweeps.md): exact names first, then prefixes.
 METRIC_UNITS = {
@@ -304,19 +305,7 @@ def histories_section(ctx, sweep, Section, sid="histories"):
     return s
 
 
-def _overrides(sweep):
-    """run id -> {case key: value text} from sweep.json's run list."""
-    out = {}
-    for e in sweep.meta.get("runs", []) or []:
-        if not isinstance(e, dict):
-            continue
-        d = {}
-        for item in e.get("overrides", []) or []:
-            if isinstance(item, str) and "=" in item:
-                k, v = item.split("=", 1)
-                d[k.strip()] = v.strip()
-        out[e.get("id")] = d
-    return out
+_overrides = overrides   # run id -> {case key: value text} (report_select.py)
 
 
 def _series_names(runs, sweep):
@@ -371,16 +360,21 @@ def _reference_text(runs):
             "(docs/sweeps.md), so these are discretisation errors against that reference.")
 
 
-def wp_section(ctx, sweep, Section, metric, sid, stem, title_of=""):
+def wp_section(ctx, sweep, Section, metric, sid, stem, title_of="", cost="wall_seconds",
+               by=None, runs=None):
+    """One work-precision diagram: `metric` against the cost column (its `_min`/`_max` as
+    bars when there), one panel per mesh, one series per scheme (and the case keys that vary
+    within it), or per value of the column `by` when given; runs: the runs to draw (default:
+    every run of kind `run`)."""
     unit = metric_unit(metric)
-    s = Section(sid, f"Work-precision: {metric} against time-loop wall time{title_of}",
-                "figure")
-    runs = [r for r in sweep.runs if r.kind == "run"]
+    what = "time-loop wall time" if cost == "wall_seconds" else f"`{cost}`"
+    s = Section(sid, f"Work-precision: {metric} against {what}{title_of}", "figure")
+    runs = [r for r in (sweep.runs if runs is None else runs) if r.kind == "run"]
     floor_col = floor_column(sweep, metric)
     has_floor = floor_col in sweep.columns
     drawn, skipped = [], []
     for r in runs:
-        e, w = r.num(metric), r.num("wall_seconds")
+        e, w = r.num(metric), r.num(cost)
         if not r.ok:
             skipped.append((r, r.status or "failed"))
         elif e is None:
@@ -397,7 +391,9 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of=""):
         s.available = False
         s.missing = (f"no ok run of {sweep.dir} with a positive `{metric}` and a wall time.")
         return s
-    series = _series_names(drawn, sweep)
+    series = (_series_names(drawn, sweep) if by is None else
+              {r.id: f"{by} = {r.get(by) or _overrides(sweep).get(r.id, {}).get(by, '–')}"
+               for r in drawn})
     names = list(dict.fromkeys(series[r.id] for r in drawn))
     style = {}
     scheme_count, fb = {}, 0
@@ -416,12 +412,13 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of=""):
         fl = r.num(floor_col) if has_floor else None
         c, mk = style[series[r.id]]
         points.setdefault(r.mesh, []).append(dict(
-            series=series[r.id], color=c, marker=mk, x=r.num("wall_seconds"),
-            xlo=r.num("wall_seconds_min"), xhi=r.num("wall_seconds_max"), y=r.num(metric),
+            series=series[r.id], color=c, marker=mk, x=r.num(cost),
+            xlo=r.num(cost + "_min"), xhi=r.num(cost + "_max"), y=r.num(metric),
             floor=fl if finite(fl) and fl > 0 else None, dt=r.dt, run=r))
     panels = [(f"mesh {m}" if m else "mesh (not recorded)", points[m]) for m in meshes]
     reps = repeats_text(drawn)
-    xlabel = f"time-loop wall time [s] ({reps})"
+    xlabel = (f"time-loop wall time [s] ({reps})" if cost == "wall_seconds" else
+              f"{cost} ({reps})")
     files, left_out, guides = F.fig_work_precision(
         ctx["out"], stem, panels, metric_label(metric), xlabel,
         f"{metric}: {metric_text(metric)}", f"reference uncertainty ({floor_col})")

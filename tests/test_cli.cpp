@@ -531,7 +531,7 @@ TEST_F(CliTest, EveryCommandAnswersHelp) {
         "--slurm-option", "--dry-run"}},
       {"check", {"--junit"}},
       {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
-      {"report", {"--out", "--accuracy", "--stability", "--verification", "--no-discover"}},
+      {"report", {"DIR", "--out"}},
       {"plot", {"--out"}},
   };
   const Outcome top = run("--help");

@@ -16,10 +16,10 @@ import tempfile
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SCRIPT = os.path.join(HERE, "..", "reports", "long_runs.py")
-sys.path.insert(0, os.path.join(HERE, "..", "reports"))
+SCRIPT = os.path.join(HERE, "..", "cases", "long_runs", "drift.py")
+sys.path.insert(0, os.path.join(HERE, "..", "cases", "long_runs"))
 
-import long_runs  # noqa: E402
+import drift as long_runs  # noqa: E402
 
 HEAD = ["time", "kinetic_energy", "strain_energy", "total_energy", "external_work",
         "friction_dissipation", "energy_error", "contact_work_normal", "contact_energy",

@@ -52,27 +52,16 @@ class Help : public CLI::Formatter {
 const std::vector<Script>& scripts() {
   static const std::vector<Script> s = {
       {"report", "make_report.py",
-       "the HTML report of any sweep folder (docs/report.md): DIR/report/index.html; runs "
+       "the HTML report of a folder (docs/report.md): of a study's output folder (study.json) its "
+       "page, STUDY/report/index.html; of a folder of them each study's page and OUT/index.html; "
+       "of any other sweep folder its default page, DIR/report/index.html; runs "
        "reports/make_report.py with the arguments as given",
-       "exit status: 0 written, 2 bad input, 1 other error",
-       {{"DIR", "", "a finished sweep folder (summary.csv, sweep.json, runs/)"},
-        {"--accuracy", "ACC_DIR", "accuracy sweep folder (cases/accuracy/accuracy.toml)"},
-        {"--stability", "PATH ...", "stability.json files or folders holding them"},
-        {"--verification", "VER_DIR", "verification sweep folder (cases/verification/sweep.toml)"},
-        {"--kim-kwak", "KK_DIR", "Kim–Kwak-type sweep folder (cases/kim_kwak/sweep.toml)"},
-        {"--kim-kwak-fields", "FIELDS_DIR", "run folder of cases/kim_kwak/rubber_groove.toml with fields/*.vtu"},
-        {"--envelope", "ENV_DIR", "stability-envelope sweep folder (cases/envelope/sweep_full.toml)"},
-        {"--long-runs", "LONG_DIR", "long-run sweep folder (cases/long_runs/sweep.toml) with its drift.csv"},
-        {"--three-d", "TD_DIR", "3D sweep folder (cases/three_d/sweep.toml)"},
-        {"--three-d-refinement", "TDR_DIR", "3D refinement sweep folder (cases/three_d/refinement.toml)"},
-        {"--three-d-fields", "FIELDS_DIR", "run folder of cases/three_d/oblique_block.toml with fields/*.vtu"},
-        {"--three-d-table1", "TDT1_DIR", "3D Table 1 sweep folder (cases/three_d_table1/sweep_full.toml or table1_fast.toml)"},
-        {"--three-d-stability", "TDS_DIR", "folder of ricochet stability results of the 3D meshes (subfolders with stability.json)"},
-        {"--ball-block", "BB_DIR", "sweep folder of the 3D ball on a block (cases/ball_block/sweep_full.toml or ball_block_fast.toml)"},
-        {"--ball-block-fields", "BBF_DIR", "run folder of cases/ball_block/ball_block.toml with fields"},
-        {"--out", "OUT", "report folder (default DIR/report)"},
-        {"--max-run-plots", "N", "draw the histories of at most N runs (default 30)"},
-        {"--no-discover", "", "do not look for accuracy/, stability/, verification/, kim_kwak/, rubber_groove/, envelope/, long_runs/, three_d/, three_d_refinement/, oblique_block/, three_d_table1/, three_d_stability/, ball_block/ and ball_block_fields/ next to DIR"},
+       "exit status: 0 written, 2 bad input (a layout error names the study.toml and the key), 1 other error",
+       {{"DIR", "", "a study's output folder, a folder of them (ricochet reproduce --out), or a finished sweep folder"},
+        {"--study", "STUDY_OUT", "a study's output folder: its page (what DIR does for a folder with study.json)"},
+        {"--index", "OUT", "OUT/index.html only: one row per OUT/<study>/study.json"},
+        {"--out", "OUT", "report folder (default DIR/report; not with --index or a folder of studies)"},
+        {"--max-run-plots", "N", "plug-ins that draw run histories draw at most N (default 30)"},
         {"-h, --help", "", "the script's help"}}},
       {"plot", "plot_run.py",
        "one PNG of a run's history (docs/report.md): RUN_DIR/history.png; runs reports/plot_run.py "

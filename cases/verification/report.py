@@ -1,5 +1,5 @@
-"""The report's verification part: the analytic cases of cases/verification/ (docs/verification.md)
-run by one sweep, each measured against its reference in reference/verification.toml, for every
+"""The verification study's plug-in (cases/verification/study.toml; docs/studies.md, Writing a
+plug-in): the analytic cases of this folder (docs/verification.md) run by one sweep, each measured against its reference in reference/verification.toml, for every
 run of every scheme.
 
 Adding a case is adding one CaseSpec to CASES below:
@@ -10,14 +10,13 @@ Adding a case is adding one CaseSpec to CASES below:
     table, for a derived value), and a function (run, reference table) -> measured value or None
     that reads the run's summary.csv row / summary.json / history.csv;
   * `figure`: a function (outdir, stem, runs, reference table) -> (files, caption text) drawing
-    the reference beside the runs' histories (report_figures.py);
+    the reference beside the runs' histories (the fig_ver_* functions below);
   * `pending`: non-empty while the case is not yet in cases/verification/sweep.toml; says what
     is still missing. A case that is not in the sweep gives a "not available" section with the
     command that produces it, never a crash.
 Every table then also gets the run id, Δt, energy_error_max and penetration_max of each run.
 """
 
-import json
 import math
 import os
 import tomllib
@@ -28,14 +27,16 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-import report_figures as F
+from matplotlib.lines import Line2D
+from report_figures import _alternates, _running_mean, _styles, ms, plain_axis, plt, save
 from report_io import REPO, fmt_dt, scheme_name
+from report_page import Section as PageSection
+from report_runs import SCHEMES, column_labels, order_runs
 
 REFERENCE_VER = os.path.join(REPO, "reference", "verification.toml")
 VER_CMD = ("build/ricochet sweep cases/verification/sweep.toml --out results/verification "
            "--check cases/verification/gates_fast.toml")
 PART_TITLE = "Verification cases: analytic reference against the three schemes"
-SCHEMES = ("semi_explicit", "implicit", "explicit_penalty")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -216,7 +217,7 @@ def fig_bar(outdir, stem, runs, table, labels):
         if not (force and dur and m and v0):
             return None
         return np.where(t < dur, -m * v0 + force * t, m * v0)
-    files = F.fig_ver_contact_force(outdir, stem, ok, force, dur, p_ref,
+    files = fig_ver_contact_force(outdir, stem, ok, force, dur, p_ref,
                                     "analytic: F = ρcv₀A for 2L/c, then 0",
                                     "analytic: −mv₀ + Ft, then +mv₀")
     return files, (f"Top: the contact force on the wall (`normal_force` of history.csv), one "
@@ -232,7 +233,7 @@ def fig_block(outdir, stem, runs, table, labels):
     if not ok:
         return [], ""
     v0, a, ts, m = (table.get(k) for k in ("v0", "deceleration", "stop_time", "mass"))
-    files = F.fig_ver_sliding(outdir, stem, [(lab, r, r.history()["time"],
+    files = fig_ver_sliding(outdir, stem, [(lab, r, r.history()["time"],
                                                r.history()["momentum_x"] / m) for lab, r in ok],
                               v0, a, ts)
     dev = []
@@ -254,7 +255,7 @@ def fig_disk(outdir, stem, runs, table, labels):
     if not ok:
         return [], ""
     mu = table.get("mu")
-    files = F.fig_ver_impulse(outdir, stem, ok, mu)
+    files = fig_ver_impulse(outdir, stem, ok, mu)
     left = [r.id for r in runs if r.ok and r.history() is not None
             and r.id not in {x.id for _, x in ok}]
     return files, ("Left: the impulse path, Δp_x against Δp_y from the start of the run "
@@ -273,7 +274,7 @@ def fig_head_on(outdir, stem, runs, table, labels):
 
     def p_ref(t):
         return None  # total momentum: drawn against each run's own initial value
-    files = F.fig_ver_contact_force(outdir, stem, ok, force, dur, p_ref,
+    files = fig_ver_contact_force(outdir, stem, ok, force, dur, p_ref,
                                     "analytic interface force for 2L/c, then 0", None,
                                     conserved=True)
     drift = []
@@ -411,63 +412,6 @@ def with_unit(v, unit, digits=5):
 # ---------------------------------------------------------------------------------------------
 # Runs, columns
 
-def parse_overrides(run):
-    out = {}
-    raw = run.get("overrides")
-    try:
-        items = json.loads(raw) if raw else run.summary().get("overrides", [])
-    except ValueError:
-        items = []
-    for it in items or []:
-        if "=" in it:
-            k, v = it.split("=", 1)
-            out[k.strip()] = v.strip().strip('"')
-    return out
-
-
-def effective(run, key, ov):
-    """The value a run used for a case key: its own summary column when it has one (so the
-    default shows too), else its override, else 'default'."""
-    for c in (key.replace(".", "_"), key.split(".")[-1], "summary." + key):
-        v = run.get(c)
-        if v not in ("", None):
-            return v
-    return ov.get(key, "default")
-
-
-def column_labels(runs):
-    """{run id: header label}: scheme name, plus, for several runs of one scheme, the keys
-    whose values differ between them (else the group)."""
-    labels = {}
-    by_scheme = {}
-    for r in runs:
-        by_scheme.setdefault(r.scheme, []).append(r)
-    for scheme, rs in by_scheme.items():
-        name = scheme_name(scheme)
-        if len(rs) == 1:
-            labels[rs[0].id] = name
-            continue
-        ovs = {r.id: parse_overrides(r) for r in rs}
-        keys = []
-        for r in rs:
-            keys += [k for k in ovs[r.id] if k != "scheme" and k not in keys]
-        diff = [k for k in keys if len({effective(r, k, ovs[r.id]) for r in rs}) > 1]
-        for r in rs:
-            if diff:
-                labels[r.id] = name + ", " + ", ".join(
-                    f"{k} = {effective(r, k, ovs[r.id])}" for k in diff)
-            else:
-                labels[r.id] = f"{name}, group `{r.group}`"
-    return labels
-
-
-def order_runs(runs):
-    def key(r):
-        s = SCHEMES.index(r.scheme) if r.scheme in SCHEMES else len(SCHEMES)
-        return (s, r.scheme, runs.index(r))
-    return sorted(runs, key=key)
-
-
 def read_reference_ver(path=REFERENCE_VER):
     try:
         with open(path, "rb") as f:
@@ -480,6 +424,145 @@ def case_runs(sweep, spec):
     names = (spec.case,) + tuple(spec.aliases)
     return [r for r in sweep.runs if r.kind == "run" and r.get("case") in names
             and (not spec.groups or r.group in spec.groups)]
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures: the analytic reference beside every run
+
+def fig_ver_contact_force(outdir, stem, runs, force, duration, p_ref, ref_label, p_label,
+                          conserved=False):
+    """Top row: normal_force (kN) against time (µs), one panel per run (shared scale), with the
+    analytic plateau `force` for `duration`. Bottom: momentum_x of every run with p_ref(t) (or,
+    with conserved, each run's initial value)."""
+    import textwrap
+    n = len(runs)
+    fig = plt.figure(figsize=(max(10.5, 2.6 * n + 3.0), 6.8))
+    gs = fig.add_gridspec(2, n, height_ratios=[1.15, 1.0], hspace=0.5, wspace=0.08)
+    styles = _styles(runs)
+    top = []
+    alternating = False
+    fmax = 0.0
+    for j, ((label, r), st) in enumerate(zip(runs, styles)):
+        ax = fig.add_subplot(gs[0, j], sharey=top[0] if top else None)
+        top.append(ax)
+        h = r.history()
+        t, f = h["time"] * 1e6, h["normal_force"] / 1e3
+        fmax = max(fmax, float(np.nanmax(f)))
+        if force and duration:
+            tend = max(float(t[-1]), duration * 1e6)
+            ax.plot([0, duration * 1e6, duration * 1e6, tend], [force / 1e3] * 2 + [0, 0],
+                    color="k", ls="--", lw=1.3, zorder=3)
+        if _alternates(h["normal_force"]):
+            alternating = True
+            ax.plot(t, f, color=st["color"], lw=0.5, alpha=0.3)
+            tm, fm = _running_mean(t, f, 2)
+            ax.plot(tm, fm, color=st["color"], lw=1.5)
+        else:
+            ax.plot(t, f, color=st["color"], lw=1.5)
+        ax.set_title("\n".join(textwrap.wrap(label, 26)), fontsize=9)
+        ax.set_xlabel("time t (µs)")
+        if j == 0:
+            ax.set_ylabel("contact force normal_force (kN)")
+        else:
+            plt.setp(ax.get_yticklabels(), visible=False)
+    if force:
+        topv = min(fmax, 2.5 * force / 1e3) * 1.08
+        top[0].set_ylim(-0.04 * topv, topv)
+    handles = ([Line2D([0], [0], color="k", ls="--", lw=1.3, label=ref_label)]
+               if force and duration else [])
+    handles.append(Line2D([0], [0], color="0.3", lw=1.5, label="run: every sample"))
+    if alternating:
+        handles += [Line2D([0], [0], color="0.3", lw=0.5, alpha=0.4,
+                           label="every step (force alternating)"),
+                    Line2D([0], [0], color="0.3", lw=1.5, label="…its mean over 2 steps")]
+    top[-1].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.03, 1.0),
+                   frameon=False)
+    ax = fig.add_subplot(gs[1, :])
+    dmax, pmax = 0.0, 0.0
+    for (label, r), st in zip(runs, styles):
+        h = r.history()
+        p = h["momentum_x"]
+        if conserved:
+            # the change from the initial value: the value itself would need an offset label
+            d = p - p[0]
+            dmax, pmax = max(dmax, float(np.nanmax(np.abs(d)))), max(pmax, abs(float(p[0])))
+            ax.plot(h["time"] * 1e6, d, lw=1.4, label=label, **st)
+        else:
+            ax.plot(h["time"] * 1e6, p, lw=1.4, label=label, **st)
+    if conserved:
+        half = max(1.25 * dmax, 1e-6 * pmax, 1e-30)
+        ax.set_ylim(-half, half)
+        ax.axhline(0.0, color="k", lw=0.8, ls=":")
+    plain_axis(ax)
+    if p_ref is not None:
+        tt = np.linspace(0.0, max(float(r.history()["time"][-1]) for _, r in runs), 600)
+        pr = p_ref(tt)
+        if pr is not None:
+            ax.plot(tt * 1e6, pr, color="k", ls="--", lw=1.3, label=p_label)
+    ax.set_xlabel("time t (µs)")
+    ax.set_ylabel("change of total momentum_x,\n$p_x(t) − p_x(0)$ (kg·m/s)" if conserved
+                  else "momentum_x (kg·m/s)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return save(fig, outdir, stem)
+
+
+def fig_ver_sliding(outdir, stem, series, v0, a, t_stop):
+    """series = [(label, run, t, v)]: velocity against time beside max(v0 - a t, 0), and the
+    difference from it (mm/s)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    styles = _styles([(lab, r) for lab, r, _, _ in series])
+
+    def v_ref(t):
+        return np.maximum(v0 - a * t, 0.0)
+    tend = max(float(t[-1]) for _, _, t, _ in series)
+    tt = np.linspace(0.0, tend, 1000)
+    axes[0].plot(tt, v_ref(tt), color="k", ls="--", lw=1.6, zorder=20,
+                 label="analytic max(v₀ − μg t, 0)")
+    n = len(series)
+    for i, ((label, r, t, v), st) in enumerate(zip(series, styles)):
+        # the first runs on top: the penalty run's larger wiggles must not hide the others
+        axes[0].plot(t, v, lw=1.2, label=label, zorder=2 + n - i, **st)
+        axes[1].plot(t, 1e3 * (v - v_ref(t)), lw=0.9, label=label, zorder=2 + n - i, **st)
+    for ax in axes:
+        ax.axvline(t_stop, color="0.3", ls=":", lw=1.2)
+        ax.set_xlabel("time t (s)")
+        ax.set_xlim(0, tend)
+    axes[0].text(t_stop, 0.12 * v0, f" stop v₀/(μg)\n = {t_stop:.4g} s", fontsize=8,
+                 va="bottom", color="0.25")
+    axes[0].set_ylabel("velocity momentum_x / m (m/s)")
+    axes[0].set_title("centre-of-mass velocity")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].set_ylabel("momentum_x / m − analytic (mm/s)")
+    axes[1].set_title("difference from the analytic velocity")
+    axes[1].legend(loc="lower left", fontsize=8)
+    return save(fig, outdir, stem)
+
+
+def fig_ver_impulse(outdir, stem, runs, mu):
+    """The impulse path Δp_x against Δp_y (with |Δp_x| = μ Δp_y) and angular_momentum(t)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    styles = _styles(runs)
+    ymax = 0.0
+    for (label, r), st in zip(runs, styles):
+        h = r.history()
+        dx, dy = h["momentum_x"] - h["momentum_x"][0], h["momentum_y"] - h["momentum_y"][0]
+        ymax = max(ymax, float(np.max(dy)))
+        axes[0].plot(dy, dx, lw=1.3, label=label, **st)
+        axes[1].plot(ms(h["time"]), h["angular_momentum"], lw=1.3, label=label, **st)
+    if mu and ymax > 0:
+        yy = np.array([0.0, ymax])
+        axes[0].plot(yy, mu * yy, color="k", ls="--", lw=1.2, label=f"|Δp_x| = μ Δp_y, μ = {mu:g}")
+        axes[0].plot(yy, -mu * yy, color="k", ls="--", lw=1.2)
+    axes[0].set_xlabel("normal impulse Δp_y (kg·m/s)")
+    axes[0].set_ylabel("tangential impulse Δp_x (kg·m/s)")
+    axes[0].set_title("impulse path")
+    axes[1].set_xlabel("time t (ms)")
+    axes[1].set_ylabel("angular_momentum (kg·m²/s)")
+    axes[1].set_title("spin")
+    for ax in axes:
+        ax.legend(loc="best", fontsize=8)
+    return save(fig, outdir, stem)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -506,8 +589,7 @@ def sections(ctx, Section):
         s.available = False
         s.missing = (("the verification sweep could not be read (" + err + "). " if err else
                       "no verification sweep. ") +
-                     f"Run `{VER_CMD}` and pass `--verification results/verification` (or place "
-                     "it next to the paper sweep as `verification/`).")
+                     f"Run `{VER_CMD}`.")
         return [s]
     refs, ref_err = read_reference_ver()
     intro = (f"The analytic cases of docs/verification.md, run by one sweep: `{ver.dir}` "
@@ -531,8 +613,8 @@ def sections(ctx, Section):
     for name in sorted({r.get("case") for r in ver.runs if r.kind == "run"} - known - {""}):
         s = Section("ver_" + name, f"Case `{name}`", "figure")
         s.available = False
-        s.missing = (f"the sweep {ver.dir} has runs of case `{name}`, but reports/"
-                     "report_verification.py has no CaseSpec for it: add one to CASES. Runs: "
+        s.missing = (f"the sweep {ver.dir} has runs of case `{name}`, but "
+                     "cases/verification/report.py has no CaseSpec for it: add one to CASES. Runs: "
                      + ", ".join(f"`{r.id}`" for r in ver.runs if r.get("case") == name) + ".")
         out.append(s)
     for s in out:
@@ -632,3 +714,11 @@ def case_section(ctx, Section, ver, spec, table):
         s.header, s.rows = header, rows
         s.extra = []
     return s
+
+
+# ---------------------------------------------------------------------------------------------
+# The plug-in's entry
+
+def cases(ctx, section):
+    """One section per verification case of the layout's sweep."""
+    return sections({"out": ctx.out, "ver": ctx.sweep(section["sweep"])}, PageSection)

@@ -1,6 +1,6 @@
-"""The report's sections on the Mooney–Rivlin ball striking a free Mooney–Rivlin block
-(cases/ball_block/ball_block.toml; docs/three-dimensions.md, The ball on the block), in the 3D part
-(report_three_d.py), from two sources:
+"""The plug-in of cases/ball_block/study.toml (docs/studies.md, Writing a plug-in): the
+Mooney–Rivlin ball striking a free Mooney–Rivlin block (ball_block.toml; docs/three-dimensions.md,
+The ball on the block), from two sweeps:
 
   * the sweep of cases/ball_block/sweep_full.toml (or ball_block_fast.toml): the histories of
     one run per scheme (energy error, normal contact force, deviation of the total momentum from
@@ -15,19 +15,19 @@ import json
 import math
 import os
 import re
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
+import report_fields as RF
 import report_figures as F
-import report_kim_kwak as RK
-import report_three_d as R3
+from report_page import Section as PageSection
+from report_runs import SCHEMES, gates_result
 from report_io import REPO, fmt_dt, fmt_g, resolve_case_file, scheme_name, show_path
 
 CASE = "ball_block"
-CASE_FILE = os.path.join("cases", "three_d", "ball_block.toml")
-SWEEP_FILE = os.path.join("cases", "three_d", "ball_block_sweep.toml")
-GATES_FILE = os.path.join("ci", "gates", "ball_block.toml")
+CASE_FILE = os.path.join("cases", "ball_block", "ball_block.toml")
+SWEEP_FILE = os.path.join("cases", "ball_block", "sweep_full.toml")
+GATES_FILE = os.path.join("cases", "ball_block", "gates_full.toml")
 BB_CMD = ("build/ricochet sweep cases/ball_block/sweep_full.toml --out results/ball_block "
           "--check cases/ball_block/gates_full.toml")
 FIELDS_CMD = "build/ricochet run cases/ball_block/ball_block.toml --out results/ball_block_fields"
@@ -43,7 +43,7 @@ BODY_COLOURS = ("#e8743b", "#4e79a7", "#59a14f", "#b07aa1")
 
 
 def doc_link(out, text="docs/three-dimensions.md, The ball on the block"):
-    return R3.doc_link(out, ANCHOR, text)
+    return f"[{text}]({os.path.relpath(os.path.join(REPO, 'docs', 'three-dimensions.md'), out)}{ANCHOR})"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -107,7 +107,7 @@ def pick_scheme_runs(runs):
         "explicit_penalty": soft,
     }
     picked = []
-    for scheme in R3.SCHEMES:
+    for scheme in SCHEMES:
         cands = [r for r in runs if r.scheme == scheme and r.ok and r.history() is not None]
         if not cands:
             continue
@@ -172,7 +172,7 @@ def fig_bodies(outdir, stem, frames, names, title):
     for k, (t, v) in enumerate(frames):
         ax = fig.add_subplot(nrow, ncol, k + 1, projection="3d")
         p = v["points3"] * 1e3
-        faces = R3.boundary_faces(v["cells"])   # the faces of one cell only: each body's surface
+        faces = RF.boundary_faces(v["cells"])   # the faces of one cell only: each body's surface
         body = v["cell_data"].get("body")
         bodies = [int(body[c]) if body is not None else 0 for _, c in faces]
         seen.update(bodies)
@@ -256,24 +256,12 @@ def fig_histories(outdir, stem, runs):
 # ---------------------------------------------------------------------------------------------
 # Sections
 
-BUILDERS_TITLES = (("bb_shapes", TITLE + ": deformed shapes"),
-                   ("bb_histories", TITLE + ": energy, contact force and momentum per scheme"),
-                   ("bb_runs", TITLE + ": the runs"))
-
-
-def builders():
-    """(sid, title, fn) of the sections, for report_three_d.sections."""
-    fns = {"bb_shapes": sec_shapes, "bb_histories": sec_histories, "bb_runs": sec_runs}
-    return tuple((sid, title, fns[sid]) for sid, title in BUILDERS_TITLES)
-
-
 def _no_sweep(ctx, s):
     err = ctx.get("bb_err")
     s.available = False
     s.missing = ((f"the sweep could not be read ({err}). " if err else
                   "no sweep of the ball on the block. ")
-                 + f"Run `{BB_CMD}` and pass `--ball-block results/ball_block` (or place it "
-                 "next to the main sweep as `ball_block/`).")
+                 + f"Run `{BB_CMD}`.")
     return s
 
 
@@ -284,14 +272,12 @@ def _run_dir(fdir):
 def sec_shapes(ctx, Section, sid, title):
     s = Section(sid, title, "figure")
     folder = ctx.get("bb_fields")
-    fdir, frames = R3._fields_frames(folder)
+    fdir, frames = RF.run_frames(folder)
     if not frames:
         s.available = False
         s.missing = ((f"no fields/*.vtu in `{folder}`. " if folder else
                       "no run of the ball on the block with fields. ")
-                     + f"Run `{FIELDS_CMD}` and pass `--ball-block-fields "
-                     "results/ball_block_fields` (or place it next to the main sweep as "
-                     "`ball_block_fields/`).")
+                     + f"Run `{FIELDS_CMD}`.")
         return s
     if any("points3" not in v for _, v in frames):
         s.available = False
@@ -375,7 +361,7 @@ def sec_histories(ctx, Section, sid, title):
         parts.append(f"{label}: {fmt_g(100 * float(np.max(h['energy_error'])), 3)} %"
                      + (f", peak force {fmt_g(f)} N" if f is not None else "")
                      + (f", max |p_i − p_i(0)| {fmt_g(d, 2)} kg m/s" if d is not None else ""))
-    missing = [sch for sch in R3.SCHEMES if sch not in {r.scheme for r in picked}]
+    missing = [sch for sch in SCHEMES if sch not in {r.scheme for r in picked}]
     s.caption = (
         "One run per scheme, on the case's mesh and with its settings (the semi-explicit "
         "scheme with ten contact-frame updates at 0.9 × the critical step, the implicit scheme "
@@ -403,21 +389,10 @@ def _status(r):
 
 
 def _gates_file(sw):
-    """The gate file the sweep was checked with: ci/gates/<name>.toml of the gate set's name in
-    its gates-junit.xml (ball_block, ball_block_fast), else of its sweep file's name
-    (ball_block_sweep.toml: ball_block.toml), else cases/ball_block/gates_full.toml."""
-    names = []
-    try:
-        names.append(ET.parse(os.path.join(sw.dir, "gates-junit.xml")).getroot().get("name"))
-    except (OSError, ET.ParseError):
-        pass
+    """The gate file the sweep was checked with: gates_fast.toml for the fast sweep file
+    (sweep_fast.toml), else gates_full.toml, in this folder."""
     f = os.path.basename(str(sw.meta.get("sweep_file") or SWEEP_FILE))
-    names.append(os.path.splitext(f)[0].replace("_sweep", ""))
-    for n in names:
-        g = os.path.join("ci", "gates", f"{n}.toml")
-        if n and os.path.isfile(os.path.join(REPO, g)):
-            return g
-    return GATES_FILE
+    return GATES_FILE.replace("_full", "_fast") if "fast" in f else GATES_FILE
 
 
 def _sweep_command(sw):
@@ -429,7 +404,7 @@ def _sweep_command(sw):
            + f" --out {show_path(sw.dir)}")
     if isinstance(m.get("jobs"), int) and m["jobs"] != 1:
         cmd += f" --jobs {m['jobs']}"
-    if RK.gates_result(sw.dir)[0]:
+    if gates_result(sw.dir)[0]:
         cmd += " --check " + _gates_file(sw)
     return cmd
 
@@ -468,7 +443,7 @@ def sec_runs(ctx, Section, sid, title):
     s.runs = [r.id for r in runs]
     s.sources = [sw.dir]
     cmd = _sweep_command(sw)
-    gates, failed = RK.gates_result(sw.dir)
+    gates, failed = gates_result(sw.dir)
     gates_file = _gates_file(sw)
     gate_line = (f"**Gates** (`{gates_file}` with `cases/ball_block/gates_common.toml`, "
                  f"`gates-junit.xml` of the sweep): {gates}"
@@ -500,3 +475,25 @@ def sec_runs(ctx, Section, sid, title):
         + "; "
         + doc_link(ctx["out"]) + " discusses the case.")
     return s
+
+
+# ---------------------------------------------------------------------------------------------
+# The plug-in's entries: each reads the layout section's sweep
+
+def _legacy(ctx, section):
+    sw = ctx.sweep(section["sweep"])
+    return {"out": ctx.out, "bb": sw,
+            "bb_fields": next((r.folder for r in sw.runs if RF.find_fields(r.folder)), None)}
+
+
+def shapes(ctx, section):
+    return [sec_shapes(_legacy(ctx, section), PageSection, "bb_shapes", "Deformed shapes")]
+
+
+def histories(ctx, section):
+    return [sec_histories(_legacy(ctx, section), PageSection, "bb_histories",
+                          "Energy, contact force and momentum per scheme")]
+
+
+def runs(ctx, section):
+    return [sec_runs(_legacy(ctx, section), PageSection, "bb_runs", "The runs")]

@@ -1,4 +1,5 @@
-"""The report's Kim–Kwak-type part: the rubber ball, rubber block, V groove and bump of
+"""The Kim–Kwak-type study's plug-in (cases/kim_kwak/study.toml; docs/studies.md, Writing a
+plug-in): the rubber ball, rubber block, V groove and bump of
 cases/kim_kwak/rubber_groove.toml (docs/kim-kwak-type.md). No closed-form answer exists, so the
 part shows the motion and what the gates of cases/kim_kwak/gates.toml check, from two sources:
 
@@ -12,15 +13,14 @@ A source that is missing gives "not available" sections with the command that pr
 """
 
 import json
-import math
 import os
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
+import report_fields as RF
 import report_figures as F
-import report_generic as RG
-import report_verification as RV
+from report_page import Section as PageSection
+from report_runs import column_labels, gates_result, order_runs
 from report_io import (REPO, field_files, fmt_dt, fmt_g, read_case, read_vtu,
                        resolve_case_file, scheme_name)
 
@@ -29,7 +29,7 @@ KK_CMD = ("build/ricochet sweep cases/kim_kwak/sweep.toml --out results/kim_kwak
 FIELDS_CMD = "build/ricochet run cases/kim_kwak/rubber_groove.toml --out results/rubber_groove"
 CASE = "rubber_groove"
 CASE_FILE = os.path.join("cases", "kim_kwak", "rubber_groove.toml")
-GATES_FILE = os.path.join("ci", "gates", "kim_kwak.toml")
+GATES_FILE = os.path.join("cases", "kim_kwak", "gates.toml")
 DOC = os.path.join(REPO, "docs", "kim-kwak-type.md")
 PART_TITLE = "Kim–Kwak-type problem: rubber ball, rubber block, V groove and bump"
 MAX_PANELS = 12
@@ -39,36 +39,11 @@ ENERGY_BOUND = 0.02  # the paper's bound, drawn on the energy-error panel
 # ---------------------------------------------------------------------------------------------
 # Sources
 
-def find_fields(folder):
-    """The folder holding the VTU files of a run: FOLDER/fields, else FOLDER itself."""
-    if not folder:
-        return None
-    for d in (os.path.join(folder, "fields"), folder):
-        if os.path.isdir(d) and field_files(d):
-            return d
-    return None
-
-
-def gates_result(folder):
-    """(text, failed gate names) from the sweep's gates-junit.xml (written by --check), or
-    (None, []) without it."""
-    try:
-        root = ET.parse(os.path.join(folder, "gates-junit.xml")).getroot()
-    except (OSError, ET.ParseError):
-        return None, []
-    cases = list(root.iter("testcase"))
-    failed = [c.get("name", "?") for c in cases
-              if c.find("failure") is not None or c.find("error") is not None]
-    n = int(root.get("tests", str(len(cases))))
-    bad = int(root.get("failures", "0")) + int(root.get("errors", "0"))
-    return f"{n - bad} passed, {bad} failed", failed
-
-
 def kk_runs(sweep):
     runs = [r for r in sweep.runs if r.kind == "run"]
     if any(r.get("case") for r in runs):
         runs = [r for r in runs if r.get("case") == CASE]
-    return RV.order_runs(runs)
+    return order_runs(runs)
 
 
 def doc_link(out):
@@ -82,138 +57,6 @@ def last(h, name):
 
 # ---------------------------------------------------------------------------------------------
 # Figures
-
-def _obstacle_artists(ax, obstacles, scale=1e3):
-    """Draws the case's rigid obstacles (line, circle, polyline) in mm: the boundary and a grey
-    fill on the rigid side. Returns legend handles."""
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Polygon
-    handles = []
-    far = 50.0 * scale  # beyond any view
-    for ob in obstacles:
-        kind = ob.get("type", "line")
-        name = ob.get("name", kind)
-        if kind == "circle" and "center" in ob and "radius" in ob:
-            c = np.asarray(ob["center"], float) * scale
-            r = float(ob["radius"]) * scale
-            inside = bool(ob.get("inside", False))
-            ax.add_patch(Circle(c, r, facecolor="none" if inside else "0.8",
-                                edgecolor="k", lw=1.2, zorder=2))
-            handles.append(Line2D([0], [0], color="k", lw=1.2, marker="o", mfc="0.8", ms=8,
-                                  ls="none", label=f"{name} (rigid circle, r = "
-                                                   f"{r:g} mm)"))
-        elif kind == "polyline" and len(ob.get("points", [])) >= 2:
-            p = np.asarray(ob["points"], float) * scale
-            d0 = (p[1] - p[0]) / np.linalg.norm(p[1] - p[0])
-            d1 = (p[-1] - p[-2]) / np.linalg.norm(p[-1] - p[-2])
-            sign = 1.0 if ob.get("side", "left") == "left" else -1.0
-
-            # the chain and its end rays, closed far on the rigid side (right of travel for
-            # side = left), along the mean of the segments' normals towards it
-            seg = np.diff(p, axis=0)
-            nrm = sign * np.column_stack([seg[:, 1], -seg[:, 0]])
-            m = np.sum(nrm / np.linalg.norm(nrm, axis=1)[:, None], axis=0)
-            m = m / np.linalg.norm(m) if np.linalg.norm(m) > 0 else nrm[0] / np.linalg.norm(nrm[0])
-            a, b = p[0] - far * d0, p[-1] + far * d1
-            poly = np.vstack([a, p, b, b + 4 * far * m, a + 4 * far * m])
-            ax.add_patch(Polygon(poly, closed=True, facecolor="0.88", edgecolor="none",
-                                 zorder=0))
-            ax.plot(p[:, 0], p[:, 1], color="k", lw=1.4, zorder=2)
-            handles.append(Line2D([0], [0], color="k", lw=1.4,
-                                  label=f"{name} (rigid polyline)"))
-        elif kind == "line" and "point" in ob and "normal" in ob:
-            q = np.asarray(ob["point"], float) * scale
-            n = np.asarray(ob["normal"], float)
-            n = n / np.linalg.norm(n)
-            t = np.array([n[1], -n[0]])
-            a, b = q - far * t, q + far * t
-            ax.add_patch(Polygon(np.vstack([a, b, b - far * n, a - far * n]), closed=True,
-                                 facecolor="0.88", edgecolor="none", zorder=0))
-            ax.plot([a[0], b[0]], [a[1], b[1]], color="k", lw=1.4, zorder=2)
-            handles.append(Line2D([0], [0], color="k", lw=1.4, label=f"{name} (rigid line)"))
-    return handles
-
-
-def fig_shapes(outdir, stem, frames, obstacles, probes, title):
-    """One panel per (time, vtu) of frames: both bodies' deformed meshes (cell outlines,
-    coloured by the cell von Mises stress when the files hold it), the rigid obstacles and the
-    probe nodes; one view and one colour scale for all panels."""
-    from matplotlib.collections import PolyCollection
-    from matplotlib.colors import Normalize
-    from matplotlib.lines import Line2D
-    plt = F.plt
-    n = len(frames)
-    ncol = min(3, n)
-    nrow = math.ceil(n / ncol)
-    pts = np.vstack([v["points"] for _, v in frames]) * 1e3
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    for ob in obstacles:  # keep a circle obstacle near the bodies in view
-        if ob.get("type") == "circle" and "center" in ob and "radius" in ob:
-            c, r = np.asarray(ob["center"], float) * 1e3, float(ob["radius"]) * 1e3
-            if np.all(c + r > lo - 40) and np.all(c - r < hi + 40):
-                lo, hi = np.minimum(lo, c - r), np.maximum(hi, c + r)
-    pad = 0.06 * float(np.max(hi - lo)) + 5.0
-    lo, hi = lo - pad, hi + pad
-    has_vm = all("von_mises" in v["cell_data"] for _, v in frames)
-    norm = None
-    if has_vm:
-        vmax = max(float(np.max(v["cell_data"]["von_mises"])) for _, v in frames) or 1.0
-        norm = Normalize(0.0, vmax)
-    w = 4.0  # inches per panel
-    h = w * (hi[1] - lo[1]) / (hi[0] - lo[0])
-    fw, fh = w * ncol + 0.6 * (ncol - 1) + 1.9, h * nrow + 0.75 * (nrow - 1) + 1.55
-    fig, axes = plt.subplots(nrow, ncol, figsize=(fw, fh), squeeze=False, sharex=True,
-                             sharey=True)
-    fig.subplots_adjust(left=0.8 / fw, right=1 - 1.1 / fw, bottom=1.0 / fh, top=1 - 0.55 / fh,
-                        wspace=0.6 / w, hspace=0.75 / h)
-    pc = None
-    handles = []
-    for k, ax in enumerate(axes.ravel()):
-        if k >= n:
-            ax.set_visible(False)
-            continue
-        t, v = frames[k]
-        p = v["points"] * 1e3
-        polys = [p[c] for c in v["cells"]]
-        # faces (edged in their own colour, so no seams show), then the cell outlines
-        if has_vm:
-            pc = PolyCollection(polys, array=v["cell_data"]["von_mises"], cmap=F.CMAP,
-                                norm=norm, edgecolors="face", linewidths=0.3, zorder=1)
-            ax.add_collection(pc)
-        else:
-            body = v["cell_data"].get("body", np.zeros(len(polys)))
-            ax.add_collection(PolyCollection(
-                polys, facecolors=[("#c6dbef", "#fdd0a2")[int(b) % 2] for b in body],
-                edgecolors="face", linewidths=0.3, zorder=1))
-        ax.add_collection(PolyCollection(polys, facecolors="none", edgecolors=(0, 0, 0, 0.45),
-                                         linewidths=0.25, zorder=1.5))
-        handles = _obstacle_artists(ax, obstacles)
-        for (name, node), mk in zip(probes, ("o", "s", "^", "D")):
-            if 0 <= node < len(p):
-                ax.plot(p[node, 0], p[node, 1], marker=mk, ms=5, mfc="white", mec="k",
-                        ls="none", zorder=4)
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_aspect("equal")
-        ax.grid(False)
-        ax.set_title(f"t = {round(t * 1e3, 1):g} ms")
-        if k % ncol == 0:
-            ax.set_ylabel("y (mm)")
-        if k // ncol == nrow - 1 or k + ncol >= n:
-            ax.set_xlabel("x (mm)")
-            ax.xaxis.set_tick_params(labelbottom=True)
-    handles += [Line2D([0], [0], marker=mk, ms=5, mfc="white", mec="k", ls="none",
-                       label=f"probe {name}") for (name, _), mk in zip(probes, ("o", "s", "^", "D"))]
-    fig.legend(handles=handles, loc="lower center", ncol=min(4, max(1, len(handles))),
-               bbox_to_anchor=(0.5, 0.0), frameon=False)
-    if pc is not None:
-        cax = fig.add_axes([1 - 0.95 / fw, 1.0 / fh, 0.15 / fw, 1 - 1.55 / fh])
-        cax.grid(False)
-        cb = fig.colorbar(pc, cax=cax)
-        cb.set_label(F._sci(cb) + ", cell")
-    fig.suptitle(title, fontsize=10, y=1 - 0.12 / fh)
-    return F.save(fig, outdir, stem, svg=False)
-
 
 def fig_histories(outdir, stem, runs):
     """runs = [(label, run)]: energy_error (%) and ball_centre_vx against time, one line each."""
@@ -285,49 +128,24 @@ def fig_interfaces(outdir, stem, runs, names):
 # ---------------------------------------------------------------------------------------------
 # Sections
 
-def sections(ctx, Section):
-    """The Kim–Kwak-type part: deformed shapes (fields run), histories and runs table
-    (sweep). Each section is 'not available' on its own when its source is missing."""
-    intro = (
-        "A Kim–Kwak-type problem (" + doc_link(ctx["out"]) + ", `" + CASE_FILE + "`): a "
-        "Blatz–Ko foam-rubber ball thrown at a Mooney–Rivlin block resting on the floor of a "
-        "rigid V groove; it strikes the block and the floor, dents itself on the block's "
-        "corner and rebounds, and the block trips over a rigid bump. Large deformation, "
-        "contact between the bodies and with the obstacles, Coulomb friction μ = 0.3 "
-        "everywhere, gravity. No closed-form answer exists, so nothing here is compared with a "
-        "reference. The gates (`" + GATES_FILE + "`) check what every impact scheme must "
-        "deliver: every run reaches the end; the energy error stays below 2 % and shrinks "
-        "with the step; the bi-potential schemes' penetration between the bodies stays below "
-        "5 % of a rim segment (0.2 mm) and shrinks like the step squared; the penalty scheme's "
-        "soft constraint at least halves its penetration; friction only dissipates. The "
-        "gate result is under the runs table.")
-    builders = (("kk_shapes", "Deformed shapes of the ball and the block", sec_shapes),
-                ("kk_histories", "Energy error and ball velocity per run", sec_histories),
-                ("kk_interfaces", "Contact forces per interface", sec_interfaces),
-                ("kk_runs", "The Kim–Kwak-type runs", sec_runs))
-    return RG.part_sections(ctx, Section, builders, PART_TITLE, intro)
-
-
 def _no_sweep(ctx, s):
     err = ctx.get("kk_err")
     s.available = False
     s.missing = (("the Kim–Kwak-type sweep could not be read (" + err + "). " if err else
                   "no Kim–Kwak-type sweep. ") +
-                 f"Run `{KK_CMD}` and pass `--kim-kwak results/kim_kwak` (or place it next to "
-                 "the paper sweep as `kim_kwak/`).")
+                 f"Run `{KK_CMD}`.")
     return s
 
 
 def sec_shapes(ctx, Section, sid, title):
     s = Section(sid, title, "figure")
     given = ctx.get("kk_fields")
-    fdir = find_fields(given)
+    fdir = RF.find_fields(given)
     if fdir is None:
         s.available = False
         s.missing = ((f"no fields/*.vtu in `{given}`. " if given else
                       "no run of the Kim–Kwak-type case with fields. ") +
-                     f"Run `{FIELDS_CMD}` and pass `--kim-kwak-fields results/rubber_groove` "
-                     "(or place it next to the paper sweep as `rubber_groove/`).")
+                     f"Run `{FIELDS_CMD}`.")
         return s
     run_dir = os.path.dirname(fdir) if os.path.basename(fdir) == "fields" else fdir
     summ = {}
@@ -361,7 +179,7 @@ def sec_shapes(ctx, Section, sid, title):
     dt = summ.get("dt")
     title_run = (f"{summ.get('case', CASE)}, {scheme}"
                  + (f", Δt = {fmt_dt(dt)} s" if isinstance(dt, (int, float)) else ""))
-    s.files = fig_shapes(ctx["out"], "kim_kwak_shapes", frames, obstacles, probes, title_run)
+    s.files = RF.fig_shapes_2d(ctx["out"], "kim_kwak_shapes", frames, obstacles, probes, title_run)
     rid = _show(run_dir)
     s.runs = [rid]
     s.sources = [fdir] + ([case_path] if case_path else [])
@@ -395,7 +213,7 @@ def _show(p):
 def _ok_runs(kk, column=None):
     """(the case's runs, [(label, run)] of those ok with a history (holding `column`))."""
     runs = kk_runs(kk)
-    labels = RV.column_labels(runs)
+    labels = column_labels(runs)
     ok = [(labels[r.id], r) for r in runs if r.ok and r.history() is not None
           and (column is None or column in r.history())]
     return runs, ok
@@ -488,7 +306,7 @@ def sec_runs(ctx, Section, sid, title):
         s.available = False
         s.missing = f"no run of case `{CASE}` in {kk.dir}. Run `{KK_CMD}`."
         return s
-    labels = RV.column_labels(runs)
+    labels = column_labels(runs)
     s.header = ["run", "scheme", "Δt (s)", "energy_error_max", "penetration_max (m)",
                 "friction_dissipation (J)", "final ball_centre_vx (m/s)",
                 "final block_corner (u_x, u_y) (m)", "wall (s)", "status"]
@@ -522,3 +340,31 @@ def sec_runs(ctx, Section, sid, title):
         "of the block's struck corner (probe `block_corner`), the time-loop wall time. "
         + gate_line)
     return s
+
+
+# ---------------------------------------------------------------------------------------------
+# The plug-in's entries: each reads the layout section's sweep
+
+def _one(fn, sid, title, ctx, section):
+    sw = ctx.sweep(section["sweep"])
+    legacy = {"out": ctx.out, "kk": sw,
+              "kk_fields": next((r.folder for r in sw.runs if RF.find_fields(r.folder)), None)}
+    return [fn(legacy, PageSection, sid, title)]
+
+
+def shapes(ctx, section):
+    """The deformed ball and block of the sweep's first run with fields, with the obstacles."""
+    return _one(sec_shapes, "kk_shapes", "Deformed shapes of the ball and the block", ctx, section)
+
+
+def histories(ctx, section):
+    return _one(sec_histories, "kk_histories", "Energy error and ball velocity per run", ctx,
+                section)
+
+
+def contact_forces(ctx, section):
+    return _one(sec_interfaces, "kk_interfaces", "Contact forces per interface", ctx, section)
+
+
+def runs(ctx, section):
+    return _one(sec_runs, "kk_runs", "The Kim–Kwak-type runs", ctx, section)
