@@ -5,11 +5,13 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <mutex>
 #include <system_error>
 #include <variant>
+#include <vector>
 
 
 namespace ricochet {
@@ -29,28 +31,57 @@ std::string hex(const unsigned char* bytes, std::size_t n) {
 
 std::size_t align4(std::size_t n) { return (n + 3) & ~std::size_t{3}; }
 
+// The GNU build id among the notes of one PT_NOTE segment, [p, end); empty if none.
+std::string build_id_note(const unsigned char* p, const unsigned char* end) {
+  while (end - p >= static_cast<std::ptrdiff_t>(sizeof(ElfW(Nhdr)))) {
+    ElfW(Nhdr) nh;
+    std::memcpy(&nh, p, sizeof nh);
+    const unsigned char* name = p + sizeof nh;
+    if (static_cast<std::size_t>(end - name) < align4(nh.n_namesz)) break;
+    const unsigned char* desc = name + align4(nh.n_namesz);
+    if (static_cast<std::size_t>(end - desc) < nh.n_descsz) break;
+    if (nh.n_type == NT_GNU_BUILD_ID && nh.n_namesz == 4 && std::memcmp(name, "GNU", 4) == 0) return hex(desc, nh.n_descsz);
+    if (static_cast<std::size_t>(end - desc) < align4(nh.n_descsz)) break;
+    p = desc + align4(nh.n_descsz);
+  }
+  return {};
+}
+
 // The build id in the PT_NOTE segments of the first object dl_iterate_phdr reports: the main
-// program.
+// program, as loaded.
 int find_build_id(dl_phdr_info* info, std::size_t, void* data) {
   auto& out = *static_cast<std::string*>(data);
-  for (int i = 0; i < info->dlpi_phnum; ++i) {
+  for (int i = 0; i < info->dlpi_phnum && out.empty(); ++i) {
     const ElfW(Phdr)& ph = info->dlpi_phdr[i];
     if (ph.p_type != PT_NOTE) continue;
     const auto* p = reinterpret_cast<const unsigned char*>(info->dlpi_addr + ph.p_vaddr);
-    const unsigned char* end = p + ph.p_memsz;
-    while (p + sizeof(ElfW(Nhdr)) <= end) {
-      const auto* nh = reinterpret_cast<const ElfW(Nhdr)*>(p);
-      const unsigned char* name = p + sizeof(ElfW(Nhdr));
-      const unsigned char* desc = name + align4(nh->n_namesz);
-      if (desc + nh->n_descsz > end) break;
-      if (nh->n_type == NT_GNU_BUILD_ID && nh->n_namesz == 4 && std::string_view(reinterpret_cast<const char*>(name), 3) == "GNU") {
-        out = hex(desc, nh->n_descsz);
-        return 1;
-      }
-      p = desc + align4(nh->n_descsz);
-    }
+    out = build_id_note(p, p + ph.p_memsz);
   }
   return 1;  // only the first object, the program itself
+}
+
+// The build id of an ELF file of this machine's class, read from its PT_NOTE segments; empty
+// for another file (a script) or one without a build id. The same as find_build_id gives for
+// the program when it runs.
+std::string file_build_id(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  ElfW(Ehdr) eh;
+  if (!in.read(reinterpret_cast<char*>(&eh), sizeof eh) || std::memcmp(eh.e_ident, ELFMAG, SELFMAG) != 0 ||
+      eh.e_ident[EI_CLASS] != (sizeof(void*) == 8 ? ELFCLASS64 : ELFCLASS32) || eh.e_phentsize != sizeof(ElfW(Phdr)))
+    return {};
+  for (int i = 0; i < eh.e_phnum; ++i) {
+    ElfW(Phdr) ph;
+    in.seekg(static_cast<std::streamoff>(eh.e_phoff + i * sizeof ph));
+    if (!in.read(reinterpret_cast<char*>(&ph), sizeof ph)) return {};
+    if (ph.p_type != PT_NOTE || ph.p_filesz > (1u << 20)) continue;
+    std::vector<unsigned char> seg(ph.p_filesz);
+    const auto here = in.tellg();
+    in.seekg(static_cast<std::streamoff>(ph.p_offset));
+    if (!in.read(reinterpret_cast<char*>(seg.data()), static_cast<std::streamsize>(seg.size()))) return {};
+    in.seekg(here);
+    if (std::string id = build_id_note(seg.data(), seg.data() + seg.size()); !id.empty()) return id;
+  }
+  return {};
 }
 
 fs::path own_executable() {
@@ -79,8 +110,9 @@ std::string program_build_id(const fs::path& program) {
   fs::path path = program.empty() ? self : fs::weakly_canonical(program, ec);
   if (ec) path = program;
   if (const auto it = known.find(path); it != known.end()) return it->second;
+  const std::string gnu = path == self ? own_gnu_build_id() : file_build_id(path);
   std::string id;
-  if (path == self && !own_gnu_build_id().empty()) id = "gnu-build-id:" + own_gnu_build_id();
+  if (!gnu.empty()) id = "gnu-build-id:" + gnu;
   else if (const std::string h = file_fnv1a(path); !h.empty()) id = "fnv1a:" + h;
   else id = "none";
   known.emplace(path, id);

@@ -14,10 +14,12 @@ namespace ricochet {
 
 // The build identity of `program` (empty: this process's own executable):
 // "gnu-build-id:<hex>", the ELF note .note.gnu.build-id that the linker writes (read from the
-// loaded image with dl_iterate_phdr when `program` is this process's executable), else
-// "fnv1a:<16 hex digits>", the FNV-1a hash of the file's bytes (another program, e.g. a wrapper
-// script, or an executable linked without a build id); "none" if it cannot be read. Computed
-// once per path per process. A rebuild that links the same binary keeps the same identity.
+// loaded image with dl_iterate_phdr when `program` is this process's executable, else from the
+// file's PT_NOTE segments: the same text either way, so a sweep run in-process by a test and a
+// merge by the program agree), else "fnv1a:<16 hex digits>", the FNV-1a hash of the file's bytes
+// (a wrapper script, or an executable linked without a build id); "none" if it cannot be read.
+// Computed once per path per process. A rebuild that links the same binary keeps the same
+// identity.
 std::string program_build_id(const std::filesystem::path& program = {});
 
 // The .note.gnu.build-id of this process's executable as hex digits; empty if it has none.
