@@ -23,8 +23,9 @@ const std::vector<std::string> kSectionKinds = {"runs_table", "metric", "work_pr
                                                 "fields", "stability", "plugin"};
 
 std::string line_of(const toml::node& n, const fs::path& file) {
-  const auto line = n.source().begin.line;
-  return file.string() + (line > 0 ? ":" + std::to_string(line) : std::string());
+  std::string s = file.string();
+  if (const auto line = n.source().begin.line; line > 0) s += ':' + std::to_string(line);
+  return s;
 }
 
 // A file named relative to the study folder (or absolute) that must exist.
@@ -35,6 +36,23 @@ fs::path existing_file(const TableReader& t, const std::string& key, const fs::p
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) t.fail(key, what + " '" + p.string() + "' not found");
   return p;
+}
+
+// An optional file: empty when `key` is absent.
+fs::path optional_file(const TableReader& t, const std::string& key, const fs::path& folder, const std::string& what) {
+  if (!t.has(key)) {
+    t.text(key, "");  // marks the key as allowed here
+    return {};
+  }
+  return existing_file(t, key, folder, what);
+}
+
+// `name` of a sweep entry or a post step: it names a folder.
+std::string read_name(const TableReader& t) {
+  std::string name = t.text("name");
+  if (!valid_name(name))
+    t.fail("name", "\"" + name + "\": allowed: letters, digits, '_', '-', '.' (not first); at most 64 characters");
+  return name;
 }
 
 // `tier`: a string or an array of strings from kStudyTiers, each once; default both.
@@ -59,13 +77,10 @@ std::vector<std::string> read_tiers(const TableReader& t) {
 StudySweep read_sweep_entry(const TableReader& t, const toml::table& raw, const StudySpec& s) {
   StudySweep e;
   e.where = line_of(raw, s.file) + ": " + t.path();
-  e.name = t.text("name");
-  if (!valid_name(e.name))
-    t.fail("name", "\"" + e.name + "\": allowed: letters, digits, '_', '-', '.' (not first); at most 64 characters");
+  e.name = read_name(t);
   e.file = existing_file(t, "file", s.folder, "sweep file");
   e.tiers = read_tiers(t);
-  if (t.has("gates")) e.gates = existing_file(t, "gates", s.folder, "gate file");
-  else t.text("gates", "");
+  e.gates = optional_file(t, "gates", s.folder, "gate file");
   e.repeat = static_cast<int>(t.integer("repeat", 1, 1, 1000));
   e.jobs = static_cast<int>(t.integer("jobs", 1, 1, kMaxSweepJobs));
   e.threads = static_cast<int>(t.integer("threads", 1, 0, kMaxThreads));
@@ -76,9 +91,7 @@ StudySweep read_sweep_entry(const TableReader& t, const toml::table& raw, const 
 StudyPost read_post(const TableReader& t, const toml::table& raw, const StudySpec& s) {
   StudyPost p;
   p.where = line_of(raw, s.file) + ": " + t.path();
-  p.name = t.text("name");
-  if (!valid_name(p.name))
-    t.fail("name", "\"" + p.name + "\": allowed: letters, digits, '_', '-', '.' (not first); at most 64 characters");
+  p.name = read_name(t);
   const toml::node* c = raw.get("command");
   if (c && !c->is_array()) t.fail("command", "expected an array of strings (the program and its arguments); got " + type_name(*c));
   if (!c) t.text("command");  // "missing required key"
@@ -89,12 +102,11 @@ StudyPost read_post(const TableReader& t, const toml::table& raw, const StudySpe
   if (t.has("table") && p.table.empty()) t.fail("table", "expected the path of a CSV file; got \"\"");
   if (t.has("gates") && !t.has("table")) t.fail("gates", "only with `table` (the CSV the step writes, checked against them)");
   if (t.has("table") && !t.has("gates")) t.fail("table", "needs `gates`, the gate file to check it against");
-  if (t.has("gates")) p.gates = existing_file(t, "gates", s.folder, "gate file");
-  else t.text("gates", "");
+  p.gates = optional_file(t, "gates", s.folder, "gate file");
   // Every placeholder must expand in each of the step's tiers.
   for (const std::string& tier : p.tiers) {
     Placeholders v{"s", "o", "p", "r", {}};
-    for (const StudySweep* e : s.sweeps_of(tier)) v.sweeps[e->name] = "d";
+    for (const StudySweep* e : s.sweeps_of(tier)) v.sweeps.emplace(e->name, "sweep");
     auto check = [&](const std::string& key, const std::string& text) {
       try {
         expand_placeholders(text, v);
@@ -110,8 +122,7 @@ StudyPost read_post(const TableReader& t, const toml::table& raw, const StudySpe
 }
 
 void read_report(const TableReader& r, const toml::table& raw, StudySpec& s) {
-  if (r.has("plugin")) s.plugin = existing_file(r, "plugin", s.folder, "report plug-in");
-  else r.text("plugin", "");
+  s.plugin = optional_file(r, "plugin", s.folder, "report plug-in");
   const std::vector<TableReader> sections = r.tables("section");
   const toml::array* arr = raw.get("section") ? raw.get("section")->as_array() : nullptr;
   for (std::size_t i = 0; i < sections.size(); ++i) {
