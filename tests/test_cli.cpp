@@ -533,6 +533,7 @@ TEST_F(CliTest, EveryCommandAnswersHelp) {
       {"stability", {"--set", "--threads", "--out", "--tolerance", "--max-runs", "--end", "--energy-bound", "--quiet"}},
       {"report", {"DIR", "--out"}},
       {"plot", {"--out"}},
+      {"reproduce", {"--tier", "--out", "--studies", "--force", "--quiet", "--no-report"}},
   };
   const Outcome top = run("--help");
   EXPECT_EQ(top.status, 0) << top.output;
@@ -552,7 +553,7 @@ TEST_F(CliTest, EveryCommandAnswersHelp) {
 
 namespace {
 
-const std::vector<std::string> kCommands = {"run", "sweep", "check", "stability", "report", "plot"};
+const std::vector<std::string> kCommands = {"run", "sweep", "check", "stability", "report", "plot", "reproduce"};
 
 // The positional arguments of each command, as files that do not exist (under `dir`).
 std::string absent_files(const std::string& command, const fs::path& dir) {
@@ -596,6 +597,7 @@ std::string sample_value(const std::string& value, const fs::path& dir) {
   if (value == "REL") return "0.01";
   if (value == "TIME") return "0.001";
   if (value == "E") return "0.1";
+  if (value == "TIER") return "fast";
   if (value == "KEY=VALUE") return "time.dt=1e-5";
   return (dir / "value").string();
 }

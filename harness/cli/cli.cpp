@@ -13,6 +13,7 @@
 #include "harness/input/input_error.hpp"
 #include "harness/outputs/run_outputs.hpp"
 #include "harness/stability/stability.hpp"
+#include "harness/studies/reproduce.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_shard.hpp"
 #include "harness/sweeps/sweep_slurm.hpp"
@@ -21,7 +22,7 @@
 namespace ricochet {
 namespace {
 
-constexpr const char* kAllowed = "run, sweep, check, stability, report, plot, --version, --help";
+constexpr const char* kAllowed = "run, sweep, check, stability, report, plot, reproduce, --version, --help";
 
 // ---- values ----------------------------------------------------------------------------------
 
@@ -142,6 +143,26 @@ class CommandLine {
                         ->type_name("E");
     stability_->add_flag("-q,--quiet", stability_cmd_.quiet, "no per-trial lines on stderr");
 
+    reproduce_ = command("reproduce",
+                         "run studies (docs/studies.md): each study's sweeps of the tier, reusing unchanged runs, its gates "
+                         "and post steps; writes DIR/<study>/study.json, then the report of the studies that changed",
+                         "exit status: 0 every study passed, 4 a gate failed, 1 a sweep, run, post step or report failed, "
+                         "2 bad input (nothing written)");
+    reproduce_->add_option("STUDY", reproduce_cmd_.studies,
+                           "a study: a folder name in --studies DIR, or a path to a folder holding study.toml "
+                           "(default: every study of the tier)")
+        ->expected(0, -1)
+        ->take_all();
+    reproduce_->add_option("--tier", reproduce_cmd_.tier, "fast or full (default full): the sweeps and post steps of that tier")
+        ->type_name("TIER");
+    reproduce_out_ = reproduce_->add_option("--out", reproduce_cmd_.out_dir, "output folder (default: results/<tier>)")->type_name("DIR");
+    reproduce_->add_option("--studies", reproduce_cmd_.studies_dir,
+                           "the folder whose subfolders are the studies (default: the source tree's cases/, or $RICOCHET_CASES)")
+        ->type_name("DIR");
+    reproduce_->add_flag("--force", reproduce_cmd_.force, "rerun every run and redraw every report");
+    reproduce_->add_flag("-q,--quiet", reproduce_cmd_.quiet, "no run progress lines and no per-gate lines");
+    reproduce_->add_flag("--no-report", reproduce_cmd_.no_report, "draw no report");
+
     // report and plot: every word after the command goes to the script, --help included.
     for (const Script& s : scripts()) command(s.command, s.description, s.footer)->prefix_command()->set_help_flag();
 
@@ -177,6 +198,13 @@ class CommandLine {
       return 0;
     }
     if (const Script* s = script_of(c)) run_script(s->file, c.remaining());
+    if (&c == reproduce_) {
+      check_options(c);
+      check_out(c, reproduce_out_);
+      const std::vector<std::string> after_dashes = app_.remaining();
+      reproduce_cmd_.studies.insert(reproduce_cmd_.studies.end(), after_dashes.begin(), after_dashes.end());
+      return run_command(reproduce_cmd_, out, std::cerr);
+    }
     check_arguments(c, app_.remaining());
     check_out(c, &c == run_ ? run_out_ : &c == sweep_ ? sweep_out_ : &c == stability_ ? stability_out_ : nullptr);
 
@@ -247,18 +275,21 @@ class CommandLine {
 
   // The words CLI11 left over (`after_dashes`: those after "--" that no positional took): an
   // unknown option, or more files than the command takes; then a missing file.
-  static void check_arguments(const CLI::App& c, std::vector<std::string> after_dashes) {
-    const std::string prefix = "ricochet " + c.get_name() + ": ";
-    std::vector<std::string> words;
-    for (const std::string& w : c.remaining()) {
+  // An unknown option among the words CLI11 left over: one line naming it and the allowed ones.
+  static void check_options(const CLI::App& c) {
+    for (const std::string& w : c.remaining())
       if (w.size() > 1 && w[0] == '-') {
         std::string allowed;
         for (const CLI::Option* o : ordered_options(c))
           if (!o->get_positional()) allowed += (allowed.empty() ? "" : ", ") + long_name(o);
-        throw InputError(prefix + "unknown option '" + w + "'; allowed: " + allowed);
+        throw InputError("ricochet " + c.get_name() + ": unknown option '" + w + "'; allowed: " + allowed);
       }
-      words.push_back(w);
-    }
+  }
+
+  static void check_arguments(const CLI::App& c, std::vector<std::string> after_dashes) {
+    const std::string prefix = "ricochet " + c.get_name() + ": ";
+    check_options(c);
+    std::vector<std::string> words = c.remaining();
     words.insert(words.end(), after_dashes.begin(), after_dashes.end());
     std::vector<std::string> names, given;
     for (const CLI::Option* o : c.get_options([](const CLI::Option* o) { return o->get_positional(); })) {
@@ -300,6 +331,9 @@ class CommandLine {
                     ": a verification and benchmark harness for frictional impact simulation",
                 "ricochet"};
   CLI::App *run_ = nullptr, *sweep_ = nullptr, *check_ = nullptr, *stability_ = nullptr, *help_ = nullptr;
+  CLI::App* reproduce_ = nullptr;
+  CLI::Option* reproduce_out_ = nullptr;
+  ReproduceCommand reproduce_cmd_;
   CLI::Option *jobs_ = nullptr, *repeat_ = nullptr, *junit_ = nullptr, *force_ = nullptr, *shard_ = nullptr, *merge_ = nullptr;
   CLI::Option *slurm_ = nullptr, *shards_ = nullptr;
   CLI::Option *run_out_ = nullptr, *sweep_out_ = nullptr, *stability_out_ = nullptr;

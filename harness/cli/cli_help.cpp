@@ -105,7 +105,8 @@ std::string synopsis(const CLI::App& app) {
   for (const CLI::Option* o : ordered_options(app)) {
     if (is_help(app, o)) continue;
     if (o->get_positional()) {
-      s += " " + o->get_name(true, false);
+      // One that takes any number of words (`reproduce [STUDY...]`) may be left out.
+      s += o->get_expected_max() > 1 ? " [" + o->get_name(true, false) + "...]" : " " + o->get_name(true, false);
       continue;
     }
     s += " [" + long_name(o) + (takes_value(o) ? " " + o->get_type_name() : "") + "]";

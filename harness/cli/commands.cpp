@@ -12,6 +12,7 @@
 #include "harness/input/case_setup.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/outputs/run_outputs.hpp"
+#include "harness/studies/study_placeholders.hpp"
 
 namespace ricochet {
 namespace {
@@ -64,11 +65,14 @@ int run_command(const RunCommand& c) {
   return r.status == RunStatus::ok ? 0 : 3;
 }
 
-void run_script(const std::string& script, const std::vector<std::string>& args) {
-  const char* python = std::getenv("RICOCHET_PYTHON");
+std::string report_script_path(const std::string& script) {
   const char* dir = std::getenv("RICOCHET_REPORTS");
-  const std::string interpreter = python && *python ? python : "/usr/bin/python3";
-  const std::string path = std::string(dir && *dir ? dir : RICOCHET_REPORTS_DIR) + "/" + script;
+  return std::string(dir && *dir ? dir : RICOCHET_REPORTS_DIR) + "/" + script;
+}
+
+void run_script(const std::string& script, const std::vector<std::string>& args) {
+  const std::string interpreter = report_python();
+  const std::string path = report_script_path(script);
   if (access(path.c_str(), R_OK) != 0)
     throw InputError("report script '" + path + "' not found; set RICOCHET_REPORTS to the reports/ folder");
   std::vector<std::string> argv_s = {interpreter, path};

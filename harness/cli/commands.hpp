@@ -29,6 +29,9 @@ int run_command(const RunCommand& c);
 // (RICOCHET_PYTHON and RICOCHET_REPORTS override the interpreter and the scripts' folder); the
 // script's exit status is the command's: 0 written, 2 bad input. Throws InputError if the
 // script is missing, std::runtime_error if the interpreter cannot be started.
+// The path of report script `script`: in $RICOCHET_REPORTS if set, else the source tree's reports/.
+std::string report_script_path(const std::string& script);
+
 [[noreturn]] void run_script(const std::string& script, const std::vector<std::string>& args);
 
 }  // namespace ricochet

@@ -722,6 +722,13 @@ std::string junit_xml(const std::vector<GateResult>& results, const std::string&
 }
 
 int run_gates(const CsvTable& table, const GateFile& gates, const fs::path& junit_path, std::ostream& out) {
+  const auto results = check_gates(table, gates, junit_path, out);
+  const bool passed = std::all_of(results.begin(), results.end(), [](const GateResult& r) { return r.passed; });
+  return passed ? 0 : kGateFailedExit;
+}
+
+std::vector<GateResult> check_gates(const CsvTable& table, const GateFile& gates, const fs::path& junit_path,
+                                    std::ostream& out) {
   const auto start = std::chrono::steady_clock::now();
   const auto results = evaluate_gates(table, gates);
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -733,7 +740,14 @@ int run_gates(const CsvTable& table, const GateFile& gates, const fs::path& juni
   out << "gates: " << (static_cast<int>(results.size()) - failed) << " passed, " << failed << " failed\n";
   out.flush();
   write_file_atomic(junit_path, junit_xml(results, gates.name, elapsed));
-  return failed == 0 ? 0 : kGateFailedExit;
+  return results;
+}
+
+std::string gate_detail(const GateResult& r) {
+  if (!r.passed) return r.failures.empty() ? std::string("failed") : join(r.failures, "; ");
+  std::string s = std::to_string(r.checked_rows) + (r.checked_rows == 1 ? " row" : " rows");
+  for (const auto& n : r.notes) s += "; " + n;
+  return s;
 }
 
 int run_command(const CheckCommand& c, std::ostream& out) {

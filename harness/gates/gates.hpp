@@ -107,6 +107,14 @@ std::string junit_xml(const std::vector<GateResult>& results, const std::string&
 int run_gates(const CsvTable& table, const GateFile& gates, const std::filesystem::path& junit_path,
               std::ostream& out);
 
+// run_gates, returning the results instead of the status (`ricochet reproduce` records them).
+std::vector<GateResult> check_gates(const CsvTable& table, const GateFile& gates, const std::filesystem::path& junit_path,
+                                    std::ostream& out);
+
+// What describe() says after the gate's name: "N rows[; note...]" for a passing gate, its
+// failures joined by "; " for a failing one.
+std::string gate_detail(const GateResult& result);
+
 // `ricochet check SUMMARY.csv GATES.toml [--junit FILE]`.
 struct CheckCommand {
   std::string summary_csv, gates_toml;

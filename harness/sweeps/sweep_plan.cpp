@@ -8,6 +8,7 @@
 
 #include "harness/input/case_spec.hpp"
 #include "harness/input/input_error.hpp"
+#include "harness/sweeps/run_identity.hpp"
 #include "harness/sweeps/sweep.hpp"
 
 namespace ricochet {
@@ -128,6 +129,26 @@ SweepPlan::SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, c
   for (std::size_t i = 0; i < runs_.size(); ++i) index_[runs_[i].id] = i;
   for (const SweepRun& r : runs_)
     if (!base_hash_.count(r.base)) base_hash_[r.base] = fnv1a_hex(read_text(r.base));
+  build_id_ = program_build_id(options_.executable);
+  // The mesh files of each run's resolved case (its overrides may pick or replace them), each
+  // file hashed once. A case that cannot be read (check_runs reports it) reads no mesh here.
+  std::map<fs::path, Json> hashes;
+  mesh_hashes_.resize(runs_.size(), Json::object());
+  for (std::size_t i = 0; i < runs_.size(); ++i) {
+    std::vector<fs::path> files;
+    try {
+      files = mesh_files(read_case(runs_[i].base.string(), runs_[i].set_args()));
+    } catch (const InputError&) {
+    }
+    for (const fs::path& f : files) {
+      auto it = hashes.find(f);
+      if (it == hashes.end()) {
+        const std::string h = file_fnv1a(f);
+        it = hashes.emplace(f, h.empty() ? Json() : Json(h)).first;
+      }
+      mesh_hashes_[i][f.string()] = it->second;
+    }
+  }
 }
 
 fs::path SweepPlan::folder(std::size_t i) const { return options_.out_dir / runs_[i].folder(); }
@@ -152,6 +173,8 @@ std::string SweepPlan::request(std::size_t i) const {
     if (v.key != "threads") o.push_back(v.set_arg());
   j["overrides"] = o;
   j["repeats"] = repeats(i);
+  j["meshes_fnv1a"] = mesh_hashes_[i];
+  j["program_build"] = build_id_;
   if (run.stability) {
     j["kind"] = "stability";
     Json opt = Json::array();

@@ -34,7 +34,8 @@ struct RunRecord {
 class SweepPlan {
  public:
   // Hashes each run's base case (its text, FNV-1a), so that editing one base case reruns only
-  // the runs made from it.
+  // the runs made from it, and the mesh files each run's case reads (run_identity.hpp); takes
+  // the build identity of the program that runs them (SweepOptions::executable).
   SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options);
 
   const SweepSpec& spec() const { return spec_; }
@@ -51,9 +52,10 @@ class SweepPlan {
   int repeats(std::size_t i) const;
   // The outputs of repeat k (from 1) of run i: its folder, or folder/repeat-k when it repeats.
   std::filesystem::path repeat_dir(std::size_t i, int k) const;
-  // The text of the run's overrides.json: its id, base case and the base's hash, its overrides
-  // and its number of repeats; for a stability search also `kind` and its search options (a
-  // run's text has neither, so that the folders of sweeps run before they existed are reused). Not its threads: they change the timings only, never the
+  // The text of the run's overrides.json: its id, base case and the base's hash, its overrides,
+  // its number of repeats, the hashes of the mesh files its case reads (`meshes_fnv1a`) and the
+  // program's build identity (`program_build`); for a stability search also `kind` and its
+  // search options. Not its threads: they change the timings only, never the
   // results, so a sweep resumed with another --jobs or --threads (or `threads` values) reuses
   // its finished runs; each run's summary.json records the threads it used.
   std::string request(std::size_t i) const;
@@ -81,8 +83,9 @@ class SweepPlan {
 
   // The sweep definition's fingerprint: FNV-1a (64 bits, 16 hex digits) of every run's request
   // (above), in the sweep's order. Two invocations with the same fingerprint run the same runs
-  // with the same identities; it changes with the runs, their overrides, their base cases' text
-  // and --repeat, not with --jobs, --threads or the output folder.
+  // with the same identities; it changes with the runs, their overrides, their base cases' text,
+  // their mesh files, the program's build and --repeat, not with --jobs, --threads or the output
+  // folder.
   std::string definition() const;
 
   // Whether run i was finished by an earlier invocation: its overrides.json matches the request
@@ -99,6 +102,8 @@ class SweepPlan {
   const SweepOptions& options_;
   std::map<std::string, std::size_t> index_;
   std::map<std::filesystem::path, std::string> base_hash_;  // FNV-1a of each base case's text
+  std::vector<Json> mesh_hashes_;  // per run: {mesh file: FNV-1a of its bytes, or null} (run_identity.hpp)
+  std::string build_id_;           // program_build_id of the program that runs the runs
   std::vector<bool> scope_;                                  // empty: every run
 };
 

@@ -42,15 +42,6 @@ std::string sbatch_log(const fs::path& dir, const std::string& pattern) {
   return out + "/" + pattern + "\"";
 }
 
-// The first line of `text`, trimmed, at most 300 characters.
-std::string first_line(const std::string& text) {
-  std::size_t start = text.find_first_not_of(" \t\r\n");
-  if (start == std::string::npos) return {};
-  std::string line = text.substr(start, text.find('\n', start) - start);
-  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-  return line.size() > 300 ? line.substr(0, 300) + "..." : line;
-}
-
 // sbatch --parsable prints "JOBID" or "JOBID;CLUSTER": the job id, or empty if it is not one.
 std::string job_id(const std::string& answer) {
   std::string id = first_line(answer);
@@ -189,11 +180,21 @@ fs::path find_on_path(const std::string& name) {
   return {};
 }
 
-ProgramOutput run_program(const std::vector<std::string>& argv_in) {
+std::string first_line(const std::string& text) {
+  std::size_t start = text.find_first_not_of(" \t\r\n");
+  if (start == std::string::npos) return {};
+  std::string line = text.substr(start, text.find('\n', start) - start);
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  return line.size() > 300 ? line.substr(0, 300) + "..." : line;
+}
+
+ProgramOutput run_program(const std::vector<std::string>& argv_in, const fs::path& cwd) {
   std::vector<std::string> args = argv_in;
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  const std::string cwd_text = cwd.string();
+  const char* dir = cwd_text.empty() ? nullptr : cwd_text.c_str();
   int out[2], err[2], report[2];
   if (pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe: " + errno_text(errno));
   if (pipe2(err, O_CLOEXEC) != 0) {
@@ -210,7 +211,8 @@ ProgramOutput run_program(const std::vector<std::string>& argv_in) {
   if (pid == 0) {
     // The child: async-signal-safe calls only, until exec.
     const int in = open("/dev/null", O_RDONLY);
-    if (in >= 0 && dup2(in, 0) >= 0 && dup2(out[1], 1) >= 0 && dup2(err[1], 2) >= 0) execv(argv[0], argv.data());
+    if (in >= 0 && dup2(in, 0) >= 0 && dup2(out[1], 1) >= 0 && dup2(err[1], 2) >= 0 && (!dir || chdir(dir) == 0))
+      execv(argv[0], argv.data());
     const int e = errno;
     if (write(report[1], &e, sizeof e) < 0) _exit(127);
     _exit(127);

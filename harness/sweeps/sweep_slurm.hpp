@@ -89,9 +89,13 @@ struct ProgramOutput {
   std::string out, err; // its stdout and stderr
 };
 
-// Runs `argv` (argv[0] a path) as a child process, stdin from /dev/null, and collects its
-// stdout and stderr. Throws std::runtime_error if it cannot be started.
-ProgramOutput run_program(const std::vector<std::string>& argv);
+// The first line of `text` (a child's stderr), trimmed, at most 300 characters.
+std::string first_line(const std::string& text);
+
+// Runs `argv` (argv[0] a path; a relative one from `cwd`) as a child process in the folder `cwd`
+// (empty: this process's), stdin from /dev/null, and collects its stdout and stderr. Throws
+// std::runtime_error if it cannot be started (or `cwd` entered).
+ProgramOutput run_program(const std::vector<std::string>& argv, const std::filesystem::path& cwd = {});
 
 // The body of `ricochet sweep FILE --slurm ...`, called by run_command (sweep.hpp) once the sweep
 // file, its runs and the gate file have been read and checked. Prints the job ids (or, with

@@ -189,13 +189,6 @@ fs::path read_base(const std::string& file, const TableReader& r) {
   return p;
 }
 
-bool valid_name(const std::string& s) {
-  if (s.empty() || s.size() > 64 || s[0] == '.' || s[0] == '-') return false;
-  for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) return false;
-  return true;
-}
-
 void merge(std::vector<SweepValue>& into, const std::vector<SweepValue>& values) {
   for (const SweepValue& v : values) {
     std::erase_if(into, [&](const SweepValue& o) { return o.key == v.key; });
@@ -286,6 +279,13 @@ std::vector<SweepStabilityOption> read_stability_options(const TableReader& g) {
 constexpr const char* kStabilityKeys[] = {"tolerance", "max_runs", "end", "energy_bound"};
 
 }  // namespace
+
+bool valid_name(const std::string& s) {
+  if (s.empty() || s.size() > 64 || s[0] == '.' || s[0] == '-') return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) return false;
+  return true;
+}
 
 std::string toml_text(const toml::node& v) {
   switch (v.type()) {

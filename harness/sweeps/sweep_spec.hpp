@@ -113,6 +113,10 @@ std::vector<SweepRun> expand(const SweepSpec& spec);
 
 // --- pieces, exposed for tests ----------------------------------------------------------------
 
+// A name that may name a folder: letters, digits, '_', '-', '.', not '.' or '-' first, at most 64
+// characters (sweeps, groups, a study's sweeps).
+bool valid_name(const std::string& s);
+
 // A TOML value as TOML text that parses back to the same value: strings quoted and escaped,
 // floats in shortest round-trip form with a short exponent ("1e-5", "0.25", "2.0"), arrays as
 // "[a, b]", tables as "{ k = v }". Throws InputError for date/time values.
