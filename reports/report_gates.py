@@ -33,9 +33,9 @@ def read_gate_defs(path, seen=None):
 
 def verdicts(sweep_dir, run_ids, entry):
     """{gate name: {"passed": bool, "detail": text, "runs": [run ids named]}} from the
-    study.json entry of the sweep (its `gates`), else gates-junit.xml; {} without either."""
+    study.json entry of the sweep (its `gate_results`), else gates-junit.xml; {} without either."""
     out = {}
-    for g in (entry or {}).get("gates", []) or []:
+    for g in (entry or {}).get("gate_results", []) or []:
         if isinstance(g, dict) and "name" in g:
             out[g["name"]] = {"passed": bool(g.get("passed")), "detail": str(g.get("detail", "")),
                               "runs": [r for r in run_ids if r in str(g.get("detail", ""))]}

@@ -36,7 +36,7 @@ def gate_counts(sj):
     """(passed, failed) over the gates of every sweep and post step in study.json."""
     ok = bad = 0
     for e in (sj.get("sweeps", []) or []) + (sj.get("post", []) or []):
-        for g in (e.get("gates", []) if isinstance(e, dict) else []) or []:
+        for g in (e.get("gate_results", []) if isinstance(e, dict) else []) or []:
             if isinstance(g, dict):
                 ok += bool(g.get("passed"))
                 bad += not g.get("passed")
@@ -44,7 +44,7 @@ def gate_counts(sj):
 
 
 def run_counts(sj):
-    n = {"runs": 0, "reused": 0, "ran": 0, "failed": 0}
+    n = {"runs": 0, "reused": 0, "run_now": 0, "failed": 0}
     for e in sj.get("sweeps", []) or []:
         for k in n:
             v = e.get(k) if isinstance(e, dict) else None
@@ -77,7 +77,7 @@ def write_index(out, now=""):
                  f"<td>{html.escape(str(sj.get('tier', '?')))}</td><td>{ok}</td>"
                  f'<td class="{"bad" if bad else "nw"}">{bad}</td>'
                  f'<td class="{STATUS_CLASS.get(status, "")}">{html.escape(status)}</td>'
-                 f"<td>{n['reused']} / {n['ran']} / {n['failed']}</td></tr>")
+                 f"<td>{n['reused']} / {n['run_now']} / {n['failed']}</td></tr>")
     h.append("</tbody></table></body></html>")
     path = os.path.join(out, "index.html")
     with open(path, "w") as f:

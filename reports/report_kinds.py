@@ -91,6 +91,7 @@ def metric(ctx, sec, sweep, sid):
     s.files = KF.fig_metric(ctx.out, sid, series, x, y, by, sec.get("logx", False),
                             sec.get("logy", False))
     s.runs = [i for pts in series.values() for _, _, i in pts]
+    s.series = {str(k): len(pts) for k, pts in series.items()}
     s.sources = [sweep.dir]
     s.caption = (f"`{y}` of summary.csv against `{x}`" + (f", one line per value of `{by}`"
                  if by else "") + f"{_where_text(sec.get('where'))}; ok runs only. Runs: "

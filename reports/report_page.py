@@ -33,6 +33,7 @@ class Section:
         self.part = None          # the heading it stands under (a layout section's title)
         self.part_intro = ""      # inline markdown under the part's heading
         self.case = None          # a plug-in's own tag (e.g. the case a section is about)
+        self.series = None        # a figure's lines: {label: points}, for manifest.json
 
     def row_labels(self):
         return [re.sub(r"[*`]", "", r[0]) for r in self.rows]

@@ -161,7 +161,7 @@ def _manifest(page):
             "reproduces": s.paper, "part": s.part, "case": s.case,
             "available": s.available and not s.error, "error": s.error,
             "missing": s.missing or None, "files": s.files, "runs": s.runs,
-            "sources": s.sources, "text": s.caption if s.kind == "note" else None,
+            "sources": s.sources, "series": s.series, "text": s.caption if s.kind == "note" else None,
             "tables": ([{"id": s.id, "rows": s.row_labels()}] if s.kind == "table" and
                        s.available and not s.error else []) +
                       [{"id": tid, "rows": [re.sub(r"[*`]", "", r[0]) for r in rows]}

@@ -88,8 +88,8 @@ class StudyContext:
         return self._sweeps[name]
 
     def gates_file(self, name):
-        g = self.sweep_entry(name).get("gates_file")
-        if g:
+        g = self.sweep_entry(name).get("gates")
+        if isinstance(g, str) and g:
             return g
         for s in self.toml.get("sweep", []) or []:
             if (isinstance(s, dict) and s.get("name") == name and s.get("gates")
@@ -161,9 +161,9 @@ def _meta(ctx, sj, folder):
             continue
         meta.append((f"Sweep {e.get('name', '?')}",
                      f"`{ctx.sweep_dir(e.get('name', '?'))}`: {e.get('runs', '?')} runs "
-                     f"({e.get('reused', '?')} reused, {e.get('ran', '?')} run, "
+                     f"({e.get('reused', '?')} reused, {e.get('run_now', '?')} run, "
                      f"{e.get('failed', '?')} failed; {e.get('seconds', '?')} s)"
-                     + (f"; gates `{e['gates_file']}`" if e.get("gates_file") else "")))
+                     + (f"; gates `{e['gates']}`" if isinstance(e.get("gates"), str) else "")))
     for p in sj.get("post", []) or []:
         if isinstance(p, dict):
             meta.append((f"Post {p.get('name', '?')}", f"exit {p.get('exit', '?')}"))

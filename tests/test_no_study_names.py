@@ -21,7 +21,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 # ci/test and ci/reproduce are listed in CI_FILES: they are checked once they call
 # `ricochet reproduce` (CHECK_CI below); until then they still name the studies' sweeps.
-CHECK_CI = False
+CHECK_CI = True
 CI_FILES = ["ci/test", "ci/reproduce"]
 
 

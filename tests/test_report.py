@@ -296,13 +296,13 @@ def setUpModule():
     write(os.path.join(out, "study.json"), json.dumps({
         "study": "teststudy", "title": "Test study", "summary": "A study of the smoke test.",
         "folder": study, "tier": "fast", "status": "gates failed",
-        "sweeps": [{"name": "tiny", "dir": "tiny", "gates_file": os.path.join(study, "gates.toml"),
-                    "runs": 4, "reused": 0, "ran": 4, "failed": 0, "seconds": 2.0,
-                    "gates": [{"name": "energy error below 50 %", "passed": True, "detail": ""},
+        "sweeps": [{"name": "tiny", "dir": "tiny", "gates": os.path.join(study, "gates.toml"),
+                    "runs": 4, "reused": 0, "run_now": 4, "failed": 0, "seconds": 2.0,
+                    "gate_results": [{"name": "energy error below 50 %", "passed": True, "detail": ""},
                               {"name": "wall time below an hour", "passed": False,
                                "detail": f"run {first}: too slow"}]},
-                   {"name": "two", "dir": "two", "runs": 7, "reused": 7, "ran": 0,
-                    "failed": 0, "seconds": 0.1, "gates": []}]}))
+                   {"name": "two", "dir": "two", "runs": 7, "reused": 7, "run_now": 0,
+                    "failed": 0, "seconds": 0.1, "gate_results": []}]}))
     # a second study with no layout: the default page
     other = os.path.join(TMP, "cases", "plain")
     write(os.path.join(other, "study.toml"),
@@ -312,8 +312,8 @@ def setUpModule():
     write(os.path.join(TMP, "out", "plain", "study.json"), json.dumps({
         "study": "plain", "title": "Plain", "summary": "No layout.", "folder": other,
         "tier": "fast", "status": "passed",
-        "sweeps": [{"name": "two", "runs": 7, "reused": 0, "ran": 7, "failed": 0,
-                    "gates": [{"name": "g", "passed": True}]}]}))
+        "sweeps": [{"name": "two", "runs": 7, "reused": 0, "run_now": 7, "failed": 0,
+                    "gate_results": [{"name": "g", "passed": True}]}]}))
 
 
 def tearDownModule():
