@@ -44,7 +44,7 @@ Outcome ricochet(const std::string& args) {
   return o;
 }
 
-const std::string kCantilever = std::string(RICOCHET_SOURCE_DIR) + "/cases/cantilever_gravity.toml";
+const std::string kCantilever = std::string(RICOCHET_SOURCE_DIR) + "/cases/examples/cantilever_gravity.toml";
 
 class Hardening : public ::testing::Test {
  protected:

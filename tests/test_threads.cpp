@@ -194,8 +194,7 @@ class BusyProcesses {
     for (int i = 0; i < n; ++i) {
       const pid_t pid = fork();
       if (pid == 0) {
-        for (volatile unsigned long k = 0;; k = k + 1) {
-        }
+        for (;;) asm volatile("");  // spin: an empty asm keeps the loop a side effect
       }
       if (pid > 0) pids_.push_back(pid);
     }

@@ -208,7 +208,7 @@ def sec_table1(ctx, Section, sid, title):
         s.missing = ((f"the sweep could not be read ({err}). " if err else
                       "no three_d_table1 sweep. ")
                      + f"Run `{T1_CMD}` (or cases/three_d_table1/sweep_fast.toml; results/three_d_table1, "
-                     "found next to the main sweep, or `--three-d-table1`).")
+                     "run by `ricochet reproduce three_d_table1`).")
         return s
     runs = [r for r in sw.find(group="table1") if r.scheme in dict(T1_SCHEMES)]
     penalty = sw.find(group="penalty")
