@@ -10,6 +10,7 @@ line per scheme. Runs it with `ricochet reproduce --studies DIR`, then checks th
 in study.json, that the runs table has a friction column, that the figure exists with two lines
 (manifest.json), that no other study's section appears, and that a second run reuses every run.
 """
+import csv
 import json
 import os
 import pathlib
@@ -108,8 +109,10 @@ class NewStudy(unittest.TestCase):
 
     @classmethod
     def reproduce(cls):
-        r = subprocess.run([RICOCHET, "reproduce", "mystudy", "--studies", str(cls.studies), "--tier", "fast",
-                            "--out", str(cls.out), "--quiet"], capture_output=True, text=True, timeout=600)
+        # From the folder above the studies, as ci/test runs from the checkout above cases/.
+        r = subprocess.run([os.path.abspath(RICOCHET), "reproduce", "mystudy", "--studies", str(cls.studies),
+                            "--tier", "fast", "--out", str(cls.out), "--quiet"],
+                           capture_output=True, text=True, timeout=600, cwd=cls.studies.parent)
         study_json = json.loads((cls.out / "mystudy" / "study.json").read_text())
         return r, study_json
 
@@ -151,6 +154,15 @@ class NewStudy(unittest.TestCase):
         index = (self.out / "index.html").read_text()
         self.assertIn("Friction against rebound", index)
         self.assertNotIn("Cros, Feng", index)
+
+    def test_case_paths_as_ricochet_sweep_names_them(self):
+        # summary.csv's case_file is the path `ricochet sweep studies/mystudy/sweep.toml` run from the
+        # same folder records, so a study's sweep and the same sweep run by hand (or through Slurm)
+        # compare cell for cell.
+        with open(self.out / "mystudy" / "grid" / "summary.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual(len(rows), 4)
+        self.assertEqual({row["case_file"] for row in rows}, {"studies/mystudy/disk.toml"})
 
     def test_second_run_reuses_every_run(self):
         r, sj = self.second

@@ -20,6 +20,18 @@ using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// A study's sweep file as `ricochet sweep` run from here would name it: relative to the current
+// folder when it lies below it, so the case paths the sweep records (summary.csv's case_file) are
+// the same whichever command ran it; absolute otherwise.
+fs::path as_named_from_here(const fs::path& file) {
+  std::error_code ec;
+  const fs::path here = fs::current_path(ec);
+  if (ec || !file.is_absolute()) return file;
+  const fs::path rel = file.lexically_relative(here);
+  if (rel.empty() || *rel.begin() == "..") return file;
+  return rel;
+}
+
 std::string seconds_text(double s) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.1f s", s);
@@ -110,7 +122,7 @@ PreparedStudy prepare_study(StudySpec spec, const std::string& tier) {
   for (const StudySweep* e : p.spec.sweeps_of(tier)) {
     PreparedSweep s;
     s.entry = *e;
-    s.spec = read_sweep(e->file.string());
+    s.spec = read_sweep(as_named_from_here(e->file).string());
     s.runs = expand(s.spec);
     check_runs(s.spec, s.runs);
     if (!e->gates.empty()) s.gates = read_gates(e->gates);
