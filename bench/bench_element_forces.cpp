@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "bench/bench_common.hpp"
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 
 namespace ricochet::bench {
 namespace {

@@ -21,7 +21,7 @@
 #include "bench/bench_common.hpp"
 #include "bench/explicit_steps.hpp"
 #include "harness/input/mesh_generators3.hpp"
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/internal_forces3.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/threads.hpp"
 

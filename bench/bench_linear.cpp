@@ -14,7 +14,7 @@
 
 #include "bench_common.hpp"
 #include "harness/input/case_setup.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 #include "solver/linear/cholmod_factor.hpp"
 #include "solver/linear/pcg.hpp"
 

@@ -14,8 +14,8 @@
 
 #include "bench/bench_common.hpp"
 #include "harness/input/mesh_generators.hpp"
-#include "solver/elements/internal_forces.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/internal_forces.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace ricochet::bench {
 namespace {

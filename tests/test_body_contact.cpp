@@ -12,10 +12,11 @@
 #include "harness/input/case_spec.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/input/mesh_generators.hpp"
-#include "solver/schemes/implicit.hpp"
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
+#include "solver/schemes/implicit.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.
 #include "alloc_counter.hpp"
 

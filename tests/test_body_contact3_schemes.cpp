@@ -21,6 +21,7 @@
 #include "harness/input/mesh_generators3.hpp"
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
 #include "solver/schemes/implicit.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 #include "solver/linear/cholmod_factor.hpp"
 #include "verification_meshes.hpp"
 // Last: it declares the C allocation functions that Eigen's headers declare differently.

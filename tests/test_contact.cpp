@@ -17,6 +17,7 @@
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/coulomb.hpp"
 #include "solver/observers/observers.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 

@@ -17,7 +17,7 @@
 #include <variant>
 #include <vector>
 
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/elements/kinematics.hpp"
 #include "solver/materials/material_lanes.hpp"
 #include "tests/verification_meshes.hpp"

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "verification_meshes.hpp"
 
 namespace ricochet {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "solver/observers/observers.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
 #include "verification_meshes.hpp"
 
@@ -438,7 +439,7 @@ TEST(Explicit, InvertedElementIsDetected) {
 }
 
 TEST(Explicit, HistoryLayout) {
-  // Column names and order as defined by history_fields() (solver/observers/run_monitor.cpp), one row per sample step (k * interval
+  // Column names and order as defined by history_fields() (solver/schemes/run_monitor.cpp), one row per sample step (k * interval
   // rounded to a step, plus the last step), probe columns equal to the probed node's state
   // from an independent evaluate/update loop (same arithmetic, so equal to a few ulps).
   const std::vector<std::string> fixed = {

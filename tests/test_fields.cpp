@@ -15,7 +15,7 @@
 
 #include "harness/input/case_setup.hpp"
 #include "harness/input/case_spec.hpp"
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/materials/material.hpp"
 #include "verification_meshes.hpp"
 

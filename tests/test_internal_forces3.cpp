@@ -1,4 +1,4 @@
-// Tests of the 3D force pass (solver/elements/internal_forces3.hpp, element_kernels3.hpp,
+// Tests of the 3D force pass (solver/forces/internal_forces3.hpp, element_kernels3.hpp,
 // material_lanes3.hpp, stress3.hpp): the pass against element3d.hpp's kernels of one cell (the
 // independent formulation), against the kernels' own arithmetic run one cell at a time (the
 // lanes: bit for bit without floating-point contraction), rigid motions, the patch test, forces
@@ -20,8 +20,8 @@
 
 #include <omp.h>
 
-#include "solver/elements/element_kernels3.hpp"
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/element_kernels3.hpp"
+#include "solver/forces/internal_forces3.hpp"
 #include "solver/materials/stress3.hpp"
 #include "solver/schemes/threads.hpp"
 #include "tests/meshes3.hpp"

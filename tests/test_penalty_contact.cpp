@@ -18,8 +18,9 @@
 #include <new>
 #include <vector>
 
-#include "solver/observers/observers.hpp"
 #include "solver/contact/penalty_contact.hpp"
+#include "solver/observers/observers.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"

@@ -24,7 +24,7 @@
 #include "harness/cli/cli.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/stability/stability.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace fs = std::filesystem;
 

@@ -25,8 +25,8 @@
 #include <utility>
 #include <vector>
 
-#include "solver/elements/internal_forces.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/internal_forces.hpp"
+#include "solver/forces/tangent.hpp"
 #include "verification_meshes.hpp"
 
 #include "alloc_counter.hpp"

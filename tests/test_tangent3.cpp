@@ -7,7 +7,7 @@
 #include <cstdio>
 
 #include "meshes3.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace ricochet {
 namespace {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "harness/input/case_setup.hpp"
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace fs = std::filesystem;

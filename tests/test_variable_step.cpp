@@ -15,6 +15,7 @@
 
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/observers/observers.hpp"
+#include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
 #include "solver/schemes/threads.hpp"
 #include "solver/schemes/time_step.hpp"

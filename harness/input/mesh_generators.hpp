@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "solver/model/mesh.hpp"
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

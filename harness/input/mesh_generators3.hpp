@@ -10,7 +10,7 @@
 
 #include "solver/model/mesh.hpp"
 #include "solver/model/mesh3.hpp"
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -35,7 +35,7 @@ std::string over_memory(const CaseSpec& c, double bytes) {
 double snapshot_bytes(double nodes, double cells) { return 8.0 * (7.0 * nodes + 13.0 * cells); }
 
 // The history's columns: the summed ones, five per contact interface, four per probe (2D; six in 3D)
-// (history_columns(), solver/observers/run_monitor.hpp).
+// (history_columns(), solver/schemes/run_monitor.hpp).
 double history_columns(const CaseSpec& c) {
   const double d = c.dimension;  // 3D: momentum_z and three angular momentum columns, 6 per probe
   return 24.0 + 3.0 * (d - 2.0) + 5.0 * static_cast<double>(c.obstacles.size() + c.contact_pairs.size()) +

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "harness/input/input_error.hpp"
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

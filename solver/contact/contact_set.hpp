@@ -27,11 +27,12 @@
 
 #include "solver/contact/body_contact.hpp"
 #include "solver/contact/body_contact3.hpp"
-#include "solver/schemes/central_difference.hpp"
 #include "solver/contact/contact_space.hpp"
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/obstacle.hpp"
 #include "solver/contact/obstacle3.hpp"
+#include "solver/core/loads.hpp"
+#include "solver/core/state.hpp"
 #include "solver/model/model3.hpp"
 
 namespace ricochet {

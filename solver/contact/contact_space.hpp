@@ -14,7 +14,7 @@
 
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/coulomb3d.hpp"  // local_norm, the 3D local pair and frame
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -19,7 +19,7 @@
 #include <cmath>
 
 #include "solver/contact/coulomb.hpp"  // ContactStatus, shared with 2D
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "solver/contact/coulomb3d.hpp"  // Frame3d, contact_frame_3d
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

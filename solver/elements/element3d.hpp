@@ -29,8 +29,8 @@
 #include <variant>
 
 #include "solver/materials/material3d.hpp"
-#include "solver/model/model.hpp"  // HourglassControl, HourglassForm (the 2D types, reused)
-#include "solver/model/types.hpp"
+#include "solver/elements/hourglass.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

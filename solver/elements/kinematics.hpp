@@ -3,7 +3,7 @@
 
 #include <array>
 
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

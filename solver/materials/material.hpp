@@ -18,7 +18,7 @@
 #include <variant>
 
 #include "solver/materials/stress.hpp"
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -25,7 +25,7 @@
 #include <cmath>
 #include <variant>
 
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -14,23 +14,10 @@
 #include <array>
 #include <cmath>
 
-#include "solver/model/types.hpp"
+#include "solver/core/force_totals.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
-
-enum class StressMeasure { cauchy = 0, pk2 = 1, kirchhoff = 2 };
-inline constexpr int kStressMeasures = 3;
-
-inline const char* stress_measure_name(StressMeasure m) {
-  switch (m) {
-    case StressMeasure::pk2: return "pk2";
-    case StressMeasure::kirchhoff: return "kirchhoff";
-    default: return "cauchy";
-  }
-}
-
-// Squared von Mises equivalents, indexed by StressMeasure [Pa^2].
-using VonMises2 = std::array<double, kStressMeasures>;
 
 // Sum of squares of a 2x2 matrix, written in scalars: Eigen's squaredNorm() packs the
 // matrix into one vector register, which after the kernels' 2-wide arithmetic is a
@@ -42,10 +29,6 @@ inline double squared_norm(const Mat2& a) {
 inline double von_mises_squared(double a11, double a22, double a33, double a12) {
   const double d1 = a11 - a22, d2 = a22 - a33, d3 = a33 - a11;
   return 0.5 * (d1 * d1 + d2 * d2 + d3 * d3) + 3.0 * a12 * a12;
-}
-
-inline void max_into(VonMises2& acc, const VonMises2& x) {
-  for (int m = 0; m < kStressMeasures; ++m) acc[m] = std::max(acc[m], x[m]);
 }
 
 // F33^2 of a material law: its own stretch33_squared(F) where it has one (no square root),
@@ -62,16 +45,6 @@ inline double stretch33_squared(const Mat& mat, const Mat2& F, double stretch) {
 // what the force pass evaluates at every integration point of every step, so it needs no
 // division or square root there. The largest of several ratios is found by cross-multiplying
 // (ratio_greater), and one division per cell gives the value.
-struct VonMisesRatio {
-  double num = 0.0;  // [Pa^2]
-  double den = 1.0;  // [-]
-  double value() const { return num / den; }
-};
-
-inline bool ratio_greater(const VonMisesRatio& a, const VonMisesRatio& b) {
-  return a.num * b.den > b.num * a.den;
-}
-
 // The pieces of von_mises_ratio, from the material's out-of-plane state o (out_of_plane(F)).
 // det F * S = adj(F) P, and S33 scaled alike.
 template <class OutOfPlaneState>
@@ -177,26 +150,5 @@ inline bool von_mises_may_exceed(const Mat& mat, const Mat2& F, const Mat2& P, d
   if (measure == StressMeasure::kirchhoff) return bound > threshold;
   return bound > threshold * det_f * det_f * f33_2;
 }
-
-// The largest squared equivalent of one measure over one evaluation of the internal forces,
-// over all cells and over the interior cells (those without a node on a contact boundary),
-// with the global cell index where each was reached (-1: none).
-struct StressPeaks {
-  double all = 0.0, interior = 0.0;  // [Pa^2]
-  int all_cell = -1, interior_cell = -1;
-
-  // Folds in one cell's squared equivalent (the max over its integration points), divided out
-  // only when it is a new peak.
-  void add(const VonMisesRatio& cell_vm2, int cell, bool on_contact_boundary) {
-    if (cell_vm2.num > all * cell_vm2.den) {
-      all = cell_vm2.value();
-      all_cell = cell;
-    }
-    if (!on_contact_boundary && cell_vm2.num > interior * cell_vm2.den) {
-      interior = cell_vm2.value();
-      interior_cell = cell;
-    }
-  }
-};
 
 }  // namespace ricochet

@@ -17,7 +17,7 @@
 #include <cmath>
 
 #include "solver/materials/stress.hpp"
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

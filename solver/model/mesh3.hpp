@@ -9,7 +9,7 @@
 
 #include <Eigen/Geometry>  // cross()
 
-#include "solver/model/types.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
 

@@ -8,24 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "solver/elements/hourglass.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/model/mesh.hpp"
 
 namespace ricochet {
 
 enum class QuadElement { full_2x2, one_point_hourglass };
-enum class HourglassForm { viscous, stiffness };
-
-// Flanagan-Belytschko hourglass control of one-point Q4 (docs/background.md, Hourglass control),
-// with q = sum_I gamma_I a_I (a = velocity for viscous, displacement for stiffness), Q = c q and
-// nodal forces f_I = gamma_I Q:
-//   viscous:   c = coeff * rho * c_p * t * sqrt(A0)           [kg/s]
-//   stiffness: c = coeff * rho * c_p^2 * t * A0 * (B:B) / 2   [N/m]
-struct HourglassControl {
-  HourglassForm form = HourglassForm::viscous;
-  double coeff = 0.1;  // [-]
-};
-
 struct BodyInput {
   std::string name;
   Mesh mesh;

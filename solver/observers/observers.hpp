@@ -1,7 +1,8 @@
 // Observers of the state at t_n (after evaluate()): energies, momentum, stresses, probes.
 #pragma once
 
-#include "solver/schemes/central_difference.hpp"
+#include "solver/core/loads.hpp"
+#include "solver/core/state.hpp"
 
 namespace ricochet {
 

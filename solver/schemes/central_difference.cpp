@@ -2,7 +2,7 @@
 
 #include <omp.h>
 
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/internal_forces3.hpp"
 
 namespace ricochet {
 namespace {

@@ -4,7 +4,8 @@
 
 #include "solver/contact/bipotential_contact.hpp"
 #include "solver/contact/penalty_contact.hpp"
-#include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/run_monitor.hpp"
 #include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
 #include "solver/schemes/time_step.hpp"

@@ -6,7 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/central_difference.hpp"
+#include "solver/schemes/run_monitor.hpp"
 #include "solver/schemes/relaxation.hpp"
 #include "solver/schemes/threads.hpp"
 

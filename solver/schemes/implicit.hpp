@@ -18,7 +18,7 @@
 #include "solver/linear/cholmod_factor.hpp"
 #include "solver/linear/pcg.hpp"
 #include "solver/schemes/run_types.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace ricochet {
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "solver/schemes/central_difference.hpp"
+
 namespace ricochet {
 namespace {
 

@@ -17,7 +17,7 @@
 #include <type_traits>
 #include <variant>
 
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/elements/kinematics.hpp"
 #include "solver/materials/material_lanes.hpp"
 #include "solver/model/model.hpp"

@@ -1,11 +1,11 @@
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 
 #include <algorithm>
 #include <tuple>
 #include <type_traits>
 
-#include "solver/elements/element_kernels.hpp"
-#include "solver/elements/system_pattern.hpp"
+#include "solver/forces/element_kernels.hpp"
+#include "solver/forces/system_pattern.hpp"
 
 namespace ricochet {
 namespace {

@@ -1,11 +1,11 @@
-#include "solver/observers/run_monitor.hpp"
+#include "solver/schemes/run_monitor.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/internal_forces3.hpp"
 #include "solver/observers/observers.hpp"
 
 namespace ricochet {

@@ -1,4 +1,4 @@
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include <omp.h>
 
-#include "solver/elements/element_kernels.hpp"
+#include "solver/forces/element_kernels.hpp"
 
 namespace ricochet {
 namespace {

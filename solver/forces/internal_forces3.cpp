@@ -1,4 +1,4 @@
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/internal_forces3.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include <omp.h>
 
-#include "solver/elements/element_kernels3.hpp"
+#include "solver/forces/element_kernels3.hpp"
 #include "solver/materials/stress3.hpp"
 
 namespace ricochet {

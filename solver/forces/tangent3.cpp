@@ -6,8 +6,8 @@
 #include <type_traits>
 #include <variant>
 
-#include "solver/elements/system_pattern.hpp"
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/system_pattern.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace ricochet {
 namespace {

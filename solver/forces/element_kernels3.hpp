@@ -45,7 +45,7 @@
 #include <type_traits>
 #include <variant>
 
-#include "solver/elements/internal_forces.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/materials/material_lanes3.hpp"
 #include "solver/model/model3.hpp"
 

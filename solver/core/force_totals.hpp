@@ -1,15 +1,68 @@
-// Internal nodal forces f_int(u) of every element block: gather -> F = I + ue^T dN/dX -> P(F)
-// -> fe = vol dN/dX P^T -> scatter. Flat DOF arrays: u, v, f are 2n, interleaved (x0, y0, x1..).
+// What a pass of the internal forces gives back besides the forces, and its workspace: the
+// energies, the smallest det F, the von Mises peaks of the stress measures (materials/stress.hpp
+// computes the equivalents), and the threaded pass's scratch (forces/internal_forces.hpp). Plain
+// data on the lowest floor, so that the state (core/state.hpp), the run's results and every
+// folder above can hold them without including the force pass.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-#include "solver/model/model.hpp"
-#include "solver/materials/stress.hpp"
+#include "solver/core/types.hpp"
 
 namespace ricochet {
+
+enum class StressMeasure { cauchy = 0, pk2 = 1, kirchhoff = 2 };
+inline constexpr int kStressMeasures = 3;
+
+inline const char* stress_measure_name(StressMeasure m) {
+  switch (m) {
+    case StressMeasure::pk2: return "pk2";
+    case StressMeasure::kirchhoff: return "kirchhoff";
+    default: return "cauchy";
+  }
+}
+
+// Squared von Mises equivalents, indexed by StressMeasure [Pa^2].
+using VonMises2 = std::array<double, kStressMeasures>;
+
+inline void max_into(VonMises2& acc, const VonMises2& x) {
+  for (int m = 0; m < kStressMeasures; ++m) acc[m] = std::max(acc[m], x[m]);
+}
+
+struct VonMisesRatio {
+  double num = 0.0;  // [Pa^2]
+  double den = 1.0;  // [-]
+  double value() const { return num / den; }
+};
+
+inline bool ratio_greater(const VonMisesRatio& a, const VonMisesRatio& b) {
+  return a.num * b.den > b.num * a.den;
+}
+
+// The largest squared equivalent of one measure over one evaluation of the internal forces,
+// over all cells and over the interior cells (those without a node on a contact boundary),
+// with the global cell index where each was reached (-1: none).
+struct StressPeaks {
+  double all = 0.0, interior = 0.0;  // [Pa^2]
+  int all_cell = -1, interior_cell = -1;
+
+  // Folds in one cell's squared equivalent (the max over its integration points), divided out
+  // only when it is a new peak.
+  void add(const VonMisesRatio& cell_vm2, int cell, bool on_contact_boundary) {
+    if (cell_vm2.num > all * cell_vm2.den) {
+      all = cell_vm2.value();
+      all_cell = cell;
+    }
+    if (!on_contact_boundary && cell_vm2.num > interior * cell_vm2.den) {
+      interior = cell_vm2.value();
+      interior_cell = cell;
+    }
+  }
+};
 
 // What the force pass tracks of the stresses (stress.hpp).
 struct StressTracking {
@@ -65,40 +118,5 @@ static_assert(kForceChunkCells % kLanes == 0);
 // Below this many chunks the pass runs on one thread (the same arithmetic): a parallel region
 // costs more than it saves on a small model.
 inline constexpr std::size_t kForceParallelChunks = 4;
-
-ForceScratch make_force_scratch(const Model& model);
-
-// Overwrites f_int. `v` (2n) is the velocity the viscous hourglass forces use.
-// With `with_energy` the strain and stored hourglass energies are summed as well. With
-// `stress` the pass also ranks the von Mises equivalents of stress->measure at every
-// integration point above stress->threshold (ForceTotals::stress; the cost:
-// bench/bench_element_forces.cpp), and fills what stress->sampled_max and
-// stress->cell_von_mises ask for (the values von_mises_maxima() and cell_von_mises() give).
-// With `scratch` (from make_force_scratch(model)) the pass is the threaded one: it uses the
-// OpenMP threads in force (RunSettings::threads, ThreadScope) and gives the same results for
-// any number of them. The energies then sum per chunk, so they may differ from the serial
-// pass's in the last bits.
-ForceTotals internal_forces(const Model& model, const double* u, const double* v, double* f_int,
-                            bool with_energy, const StressTracking* stress = nullptr,
-                            ForceScratch* scratch = nullptr);
-
-// Largest von Mises stress of `measure` over each cell's integration points, per global cell
-// [Pa]. `out` has model.num_cells() entries.
-void cell_von_mises(const Model& model, const double* u, StressMeasure measure, double* out);
-
-// The Cauchy stress [Pa] and the Green-Lagrange strain [-] of each cell at u, as symmetric
-// tensors in VTK order (XX, YY, ZZ, XY, YZ, XZ; cauchy_and_green_lagrange(), stress.hpp): 6
-// values per global cell in `cauchy` and `green_lagrange` (6 model.num_cells() each). A cell's
-// value is the mean over its integration points weighted by their reference volumes (one-point
-// cells: the centroid's value). For field snapshots only: a pass of its own over the elements.
-void cell_tensors(const Model& model, const double* u, double* cauchy, double* green_lagrange);
-
-// The peaks internal_forces() tracks, by a stress pass alone (for the implicit scheme, whose
-// force passes are Newton iterates), and in the same pass what stress.sampled_max and
-// stress.cell_von_mises ask for. `contact_cell` null: no cell is on a contact boundary.
-StressPeaks stress_peaks(const Model& model, const double* u, const StressTracking& stress);
-
-// The largest von Mises stress of each measure over all cells and integration points [Pa].
-VonMises2 von_mises_maxima(const Model& model, const double* u);
 
 }  // namespace ricochet

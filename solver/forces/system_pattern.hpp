@@ -11,7 +11,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "solver/elements/tangent.hpp"
+#include "solver/forces/tangent.hpp"
 
 namespace ricochet::system_pattern {
 

@@ -10,8 +10,8 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
-#include "solver/elements/internal_forces.hpp"
-#include "solver/elements/internal_forces3.hpp"
+#include "solver/forces/internal_forces.hpp"
+#include "solver/forces/internal_forces3.hpp"
 #include "solver/model/model.hpp"
 #include "solver/model/model3.hpp"
 

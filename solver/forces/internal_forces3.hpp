@@ -11,7 +11,7 @@
 // cell_geometry() (model3.hpp), with its forces checked against this pass's.
 #pragma once
 
-#include "solver/elements/internal_forces.hpp"  // ForceTotals, StressTracking, ForceScratch
+#include "solver/forces/internal_forces.hpp"  // ForceTotals, StressTracking, ForceScratch
 #include "solver/model/model3.hpp"
 
 namespace ricochet {
