@@ -176,7 +176,6 @@ bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x)
     failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
     return false;
   }
-  ++solver_switches_;
   use_direct();
   if (!factorize()) return false;
   refactor_next_ = false;
@@ -482,22 +481,11 @@ bool ImplicitIntegratorT<M>::exact_contact(double c) {
 
 template <class M>
 bool ImplicitIntegratorT<M>::step(bool with_energy) {
-  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u0_ = s_.u;
   v0_ = s_.v_half;
   f0_ = s_.f_int;
   const double hourglass_power0 = s_.forces.hourglass_power;
-  const double t1 = s_.time + dt;
-  // Predictor: where the step resolves the dynamics (dt <= critical_dt), linear extrapolation of
-  // the velocity, v1 = 2 v0 - v_{-1}; otherwise (and at the first step) v1 = v0.
-  if (s_.step > 0 && dt <= model_.critical_dt)
-    v1_ = 2.0 * v0_ - v_prev_;
-  else
-    v1_ = v0_;
-  for (const auto& p : run_.prescribed)
-    v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
-                     ? p.value
-                     : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+  predict(s_.step > 0 && s_.dt <= model_.critical_dt);
   impulse_.setZero();
   // The last step's reactions in the frame (and on the stencil) they were solved in.
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) add_reaction(static_cast<int>(k));
@@ -505,16 +493,41 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
   residuals_.clear();
   step_unconverged_ = false;
   iterations_on_factor_ = 0;
-  int sweeps = 0;
   double r = residual(false);
   if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
-    v1_ = v0_;  // the extrapolated predictor inverted an element: start from v0 instead
-    for (const auto& p : run_.prescribed)
-      v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
-                       ? p.value
-                       : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+    predict(false);  // the extrapolated predictor inverted an element: start from v0 instead
     r = residual(false);
   }
+  int sweeps = 0;
+  if (!newton(r, sweeps)) return false;
+  if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
+  close_step(hourglass_power0, sweeps);
+  return true;
+}
+
+// Predictor: where the step resolves the dynamics (dt <= critical_dt), linear extrapolation of the
+// velocity, v1 = 2 v0 - v_{-1} (extrapolate); otherwise (and at the first step) v1 = v0. Prescribed
+// DOFs take their velocity, or the one that reaches their displacement at t_n+1.
+template <class M>
+void ImplicitIntegratorT<M>::predict(bool extrapolate) {
+  const double dt = s_.dt, th = set_.theta;
+  const double t1 = s_.time + dt;
+  if (extrapolate)
+    v1_ = 2.0 * v0_ - v_prev_;
+  else
+    v1_ = v0_;
+  for (const auto& p : run_.prescribed)
+    v1_[p.dof] = p.kind == PrescribedDof::Kind::velocity
+                     ? p.value
+                     : (p.displacement_at(t1) - u0_[p.dof] - dt * (1.0 - th) * v0_[p.dof]) / (dt * th);
+}
+
+// Newton's iterations from the predictor (relative residual r) until the residual meets the
+// tolerance with the contact law imposed; sweeps: the most contact sweeps of an iteration. False
+// (failure_ set) when it does not converge or a solve fails.
+template <class M>
+bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
+  const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   for (int it = 0;; ++it) {
     if (!std::isfinite(r)) {
       failure_ = "non-finite Newton residual at iteration " + std::to_string(it);
@@ -580,8 +593,13 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
          iterations_on_factor_ >= set_.refactor_iterations))
       refactor_next_ = true;
   }
-  if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
+  return true;
+}
 
+// The converged step's bookkeeping, and u1, v1 become the state at t_n+1.
+template <class M>
+void ImplicitIntegratorT<M>::close_step(double hourglass_power0, int sweeps) {
+  const double dt = s_.dt, xi = set_.xi;
   // Bookkeeping of the converged step: reactions at prescribed DOFs (R = G_unconstrained/dt),
   // contact work R.du and slip work, viscous hourglass work (same xi-average as the forces).
   for (const auto& p : run_.prescribed)
@@ -611,7 +629,6 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
   s_.f_int = f1_;
   ++s_.step;
   s_.time = static_cast<double>(s_.step) * dt;
-  return true;
 }
 
 template <class M>

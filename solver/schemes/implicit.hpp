@@ -92,6 +92,9 @@ class ImplicitIntegratorT {
   void build_impulse();
   void add_reaction(int k);                                  // candidate k's reaction into impulse_
   Local stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
+  void predict(bool extrapolate);           // v1 of the step's first iterate
+  bool newton(double r, int& sweeps);       // the iterations to the converged v1
+  void close_step(double hourglass_power0, int sweeps);  // bookkeeping; u1, v1 become the state
   bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
   void constrain_matrix();
 
@@ -134,13 +137,11 @@ class ImplicitIntegratorT {
   Eigen::VectorXd v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, y_, impulse_, prescribed_v_;
   std::vector<double> residuals_;
   std::string failure_;
-  double hourglass_power0_ = 0.0;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
   double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
   long newton_total_ = 0, linear_total_ = 0;
   long exact_contact_solves_ = 0;
   long shifted_iterations_ = 0;
-  long solver_switches_ = 0;
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 
