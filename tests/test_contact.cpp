@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "solver/contact/bipotential_contact.hpp"
+#include "solver/contact/contact_space.hpp"  // solve_local
 #include "solver/contact/coulomb.hpp"
 #include "solver/observers/observers.hpp"
 #include "solver/schemes/central_difference.hpp"

@@ -18,6 +18,7 @@
 
 #include <Eigen/Geometry>  // cross()
 
+#include "solver/contact/contact_space.hpp"  // solve_local
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/coulomb3d.hpp"
 
@@ -263,7 +264,7 @@ TEST(Coulomb3d, ProjectionIsPositivelyHomogeneousAtExtremeScales) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// de_saxce_modified_3d, bipotential_update_3d, solve_local_3d, closed_form_reaction_3d
+// de_saxce_modified_3d, bipotential_update_3d, solve_local, closed_form_reaction_3d
 
 const double kRhos[] = {1e-3, 0.1, 0.5, 1.0, 2.0, 10.0, 1e3};
 
@@ -316,7 +317,7 @@ TEST(Bipotential3d, CoulombStatesAreFixedPointsForAnyRho) {
 TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
   // Random local problems: w log-uniform over 8 decades, x_free = w (a, b e) with a in [-3, 1.5]
   // (a third separate), b in [0, 3], e a random direction; mu in kMus; rho = f / w for
-  // f in {0.5, 1, 1.5}; from r0 = 0 and from a random r0 in the cone. solve_local_3d stops at
+  // f in {0.5, 1, 1.5}; from r0 = 0 and from a random r0 in the cone. solve_local stops at
   // |dr| <= 1e-14 |r| (or, below round-off, see the loop); the iteration contracts (factor
   // <= mu^2/(1+mu^2) = 0.8 in slip at f = 1), so its error is then at most a few 1e-13 of the
   // problem's scale. Checks, to 1e-10 as the issue asks (relative
@@ -346,7 +347,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
       const LocalPair3d r0_random{r0n, Vec2(mu * r0n * uni(gen) * unit_at(angle(gen)))};
       for (const LocalPair3d& r0 : {LocalPair3d{}, r0_random}) {
         for (double f : {0.5, 1.0, 1.5}) {
-          const LocalSolution3d s = solve_local_3d(xf, w, mu, f / w, r0, 1e-14, 20000);
+          const LocalSolution3d s = solve_local(xf, w, mu, f / w, r0, 1e-14, 20000);
           if (s.converged) {
             max_iterations = std::max(max_iterations, s.iterations);
           } else {
@@ -411,7 +412,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
 TEST(Bipotential3d, FrictionlessUpdateIsExactAndZeroSlipStaysZero) {
   // mu = 0, rho = 1/w: r* = r0 - (x_free + w r0) / w = -x_free / w whatever r0, projected onto
   // the half-line: one update gives (max(0, -x_free_n / w), 0), up to the cancellation r0 - r0
-  // (8 eps of |r0| + |x_free| / w), and solve_local_3d confirms it with a second.
+  // (8 eps of |r0| + |x_free| / w), and solve_local confirms it with a second.
   // x_free_t = 0 exactly with friction: x_t stays 0, so r_t = 0 exactly (no 0/0 in the
   // modified velocity or the projection) and r_n = max(0, -x_free_n / w).
   std::mt19937_64 gen(7);
@@ -427,14 +428,14 @@ TEST(Bipotential3d, FrictionlessUpdateIsExactAndZeroSlipStaysZero) {
       ASSERT_EQ(r1.t.x(), 0.0);
       ASSERT_EQ(r1.t.y(), 0.0);
     }
-    const LocalSolution3d s = solve_local_3d(xf, w, 0.0, 1.0 / w, {}, 1e-14, 100);
+    const LocalSolution3d s = solve_local(xf, w, 0.0, 1.0 / w, {}, 1e-14, 100);
     ASSERT_TRUE(s.converged);
     ASSERT_LE(s.iterations, 2) << "exact in one update, confirmed by the second";
 
     const LocalPair3d xf0{xf.n, Vec2(0.0, -0.0)};
     for (double mu : {0.0, 0.3, 2.0}) {
       for (double f : {0.5, 1.0, 1.5}) {
-        const LocalSolution3d s0 = solve_local_3d(xf0, w, mu, f / w, {}, 1e-14, 10000);
+        const LocalSolution3d s0 = solve_local(xf0, w, mu, f / w, {}, 1e-14, 10000);
         ASSERT_TRUE(s0.converged);
         ASSERT_TRUE(std::isfinite(s0.r.n));
         ASSERT_NEAR(s0.r.n, rn_exact, 1e-13 * (rn_exact + std::abs(xf.n) / w));
@@ -534,7 +535,7 @@ TEST(Coulomb3d, TangentialDataAlongOneTangentGiveThe2dResults) {
       // same result. Along a random e the iterates differ by round-off, and either iteration may
       // stop one update earlier, where |dr| <= 1e-14 |r|: tolerance 1e-13 of the scale.
       const LocalSolution s2 = solve_local(xf, w, mu, 1.0 / w, {}, 1e-14, 10000);
-      const LocalSolution3d s3 = solve_local_3d(embed(xf, e), w, mu, 1.0 / w, {}, 1e-14, 10000);
+      const LocalSolution3d s3 = solve_local(embed(xf, e), w, mu, 1.0 / w, {}, 1e-14, 10000);
       ASSERT_TRUE(s2.converged && s3.converged);
       check("solve_local", s2.r, s3.r, e, scale_solve, 1e-13 / kEps);
       if (e.x() == 1.0) {
@@ -630,7 +631,7 @@ TEST(Coulomb3d, LocalSolveAndFrameDoNotAllocate) {
   for (std::size_t k = 0; k < inputs.size(); ++k) {
     const LocalPair3d& y = inputs[k];
     const LocalPair3d p = project_coulomb_3d(y, 0.3);
-    const LocalSolution3d s = solve_local_3d(y, 0.5, 0.3, 2.0, {}, 1e-14, 1000);
+    const LocalSolution3d s = solve_local(y, 0.5, 0.3, 2.0, {}, 1e-14, 1000);
     const Frame3d f = contact_frame_3d(normals[k]);
     const Vec3 g = to_global_3d(f, s.r);
     sink += p.n + s.r.n + g.x() + to_local_3d(f, g).t.y() + closed_form_reaction_3d(y, 0.5, 0.3).n +

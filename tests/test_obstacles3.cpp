@@ -787,11 +787,6 @@ TEST(Obstacles3, CoulombOverloadsWithoutSuffixAreThe3dFunctions) {
     EXPECT_TRUE(same(bipotential_correct(r, x, mu, rho), bipotential_correct_3d(r, x, mu, rho)));
     EXPECT_TRUE(same(bipotential_update(r, x, w, mu, rho), bipotential_update_3d(r, x, w, mu, rho)));
     EXPECT_TRUE(same(closed_form_reaction(x, w, mu), closed_form_reaction_3d(x, w, mu)));
-    const LocalSolution3d s = solve_local(x, w, mu, rho, r, 1e-12, 200);
-    const LocalSolution3d s3 = solve_local_3d(x, w, mu, rho, r, 1e-12, 200);
-    EXPECT_TRUE(same(s.r, s3.r));
-    EXPECT_EQ(s.iterations, s3.iterations);
-    EXPECT_EQ(s.converged, s3.converged);
     EXPECT_EQ(local_norm(r), std::hypot(r.n, std::hypot(r.t.x(), r.t.y())));
     // The generic caller: 3D as the _3d function, 2D as coulomb.hpp's.
     LocalPair3d out3;

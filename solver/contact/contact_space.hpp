@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cmath>
+#include <type_traits>
 
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/coulomb3d.hpp"  // local_norm, the 3D local pair and frame
@@ -84,5 +85,49 @@ inline double tangential_dot(const Vec2& a, const Vec2& b) { return a.dot(b); }
 // scalar (the history's tangential_force column is then >= 0).
 inline double tangential_sum_term(const LocalPair3d& r) { return tangential_norm_3d(r.t); }
 inline double slip_work(const LocalPair3d& r, double scale, const Vec2& slip) { return -scale * r.t.dot(slip); }
+
+
+// The local problem of one contact, in either dimension: the reaction r such that x(r) and r obey
+// Coulomb's law, found with the bi-potential predictor-corrector (de Saxcé & Feng 1991; Cros,
+// Feng & Magnain 2010, Section 2) r <- bipotential_correct(r, x(r), mu, rho) from r0 until
+// |r_{i+1} - r_i| <= tol |r_{i+1}| (or no change) or max_iterations updates. x_of(r) is the
+// contact's local compliance: x_free + w r (solve_local below), or x_base + W_kk r with the
+// implicit scheme's condensed block W_kk (schemes/implicit.cpp).
+template <class Pair>
+struct LocalSolutionT {
+  Pair r;
+  int iterations = 0;  // predictor-corrector updates performed
+  bool converged = false;
+};
+using LocalSolution = LocalSolutionT<LocalPair>;
+using LocalSolution3d = LocalSolutionT<LocalPair3d>;
+
+template <class Pair, class Compliance>
+LocalSolutionT<Pair> solve_local_map(const Compliance& x_of, double mu, double rho, const Pair& r0, double tol,
+                                     int max_iterations) {
+  LocalSolutionT<Pair> s{r0, 0, false};
+  while (s.iterations < max_iterations) {
+    const Pair next = bipotential_correct(s.r, x_of(s.r), mu, rho);
+    ++s.iterations;
+    const double change = local_distance(next, s.r);
+    s.r = next;
+    if (change <= tol * local_norm(next) || change == 0.0) {
+      s.converged = true;
+      break;
+    }
+  }
+  return s;
+}
+
+// With an isotropic compliance, x = x_free + w r (the semi-explicit scheme's local problem, and
+// the closed form's: with rho = 1/w and mu = 0 the first update is exact). r0's type follows
+// x_free's, so a braced {0.0, 0.0} is a 2D pair.
+template <class Pair>
+LocalSolutionT<Pair> solve_local(const Pair& x_free, double w, double mu, double rho,
+                                 const std::type_identity_t<Pair>& r0, double tol, int max_iterations) {
+  using Tangential = decltype(Pair::t);
+  auto x_of = [&](const Pair& r) { return Pair{x_free.n + w * r.n, Tangential(x_free.t + w * r.t)}; };
+  return solve_local_map(x_of, mu, rho, r0, tol, max_iterations);
+}
 
 }  // namespace ricochet

@@ -48,30 +48,6 @@ inline LocalPair bipotential_update(LocalPair r, LocalPair x_free, double w, dou
   return bipotential_correct(r, {x_free.n + w * r.n, x_free.t + w * r.t}, mu, rho);
 }
 
-struct LocalSolution {
-  LocalPair r;
-  int iterations = 0;   // predictor-corrector updates performed
-  bool converged = false;
-};
-
-// Iterates bipotential_update from r0 until |r_{i+1} - r_i| <= tol (|r_{i+1}| + tiny) or
-// max_iterations. With rho = 1/w and mu = 0 the first update is exact.
-inline LocalSolution solve_local(LocalPair x_free, double w, double mu, double rho, LocalPair r0,
-                                 double tol, int max_iterations) {
-  LocalSolution s{r0, 0, false};
-  while (s.iterations < max_iterations) {
-    const LocalPair next = bipotential_update(s.r, x_free, w, mu, rho);
-    ++s.iterations;
-    const double change = std::hypot(next.n - s.r.n, next.t - s.r.t);
-    s.r = next;
-    if (change <= tol * std::hypot(next.n, next.t) || change == 0.0) {
-      s.converged = true;
-      break;
-    }
-  }
-  return s;
-}
-
 // The fixed point of the iteration with rho = 1/w in closed form ("impulse return map";
 // docs/background.md, Rigid obstacle: the closed-form fixed point): r_n = max(0, -x_free_n / w),
 // stick if the stick force fits in the cone.

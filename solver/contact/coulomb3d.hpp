@@ -78,30 +78,6 @@ inline LocalPair3d bipotential_update_3d(const LocalPair3d& r, const LocalPair3d
   return bipotential_correct_3d(r, {x_free.n + w * r.n, Vec2(x_free.t + w * r.t)}, mu, rho);
 }
 
-struct LocalSolution3d {
-  LocalPair3d r;
-  int iterations = 0;  // predictor-corrector updates performed
-  bool converged = false;
-};
-
-// Iterates bipotential_update_3d from r0 until |r_{i+1} - r_i| <= tol |r_{i+1}| (or no change)
-// or max_iterations, as solve_local does. With rho = 1/w and mu = 0 the first update is exact.
-inline LocalSolution3d solve_local_3d(const LocalPair3d& x_free, double w, double mu, double rho,
-                                      const LocalPair3d& r0, double tol, int max_iterations) {
-  LocalSolution3d s{r0, 0, false};
-  while (s.iterations < max_iterations) {
-    const LocalPair3d next = bipotential_update_3d(s.r, x_free, w, mu, rho);
-    ++s.iterations;
-    const double change = std::hypot(next.n - s.r.n, tangential_norm_3d(next.t - s.r.t));
-    s.r = next;
-    if (change <= tol * std::hypot(next.n, tangential_norm_3d(next.t)) || change == 0.0) {
-      s.converged = true;
-      break;
-    }
-  }
-  return s;
-}
-
 // The fixed point of the iteration in closed form, as closed_form_reaction (coulomb.hpp):
 // r_n = max(0, -x_free_n / w); stick r_t = -x_free_t / w if it fits in the cone, otherwise slip
 // r_t = mu r_n along -x_free_t / |x_free_t| (with an isotropic compliance the slip keeps the
@@ -131,10 +107,6 @@ inline LocalPair3d bipotential_correct(const LocalPair3d& r, const LocalPair3d& 
 inline LocalPair3d bipotential_update(const LocalPair3d& r, const LocalPair3d& x_free, double w, double mu,
                                       double rho) {
   return bipotential_update_3d(r, x_free, w, mu, rho);
-}
-inline LocalSolution3d solve_local(const LocalPair3d& x_free, double w, double mu, double rho, const LocalPair3d& r0,
-                                   double tol, int max_iterations) {
-  return solve_local_3d(x_free, w, mu, rho, r0, tol, max_iterations);
 }
 inline LocalPair3d closed_form_reaction(const LocalPair3d& x_free, double w, double mu) {
   return closed_form_reaction_3d(x_free, w, mu);
