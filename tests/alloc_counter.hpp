@@ -6,3 +6,10 @@
 #include <atomic>
 
 extern std::atomic<long> g_allocations;
+
+// Keeps the optimizer from removing a computation (or an allocation) whose result the test does
+// not otherwise use: p escapes to an empty asm statement that may read and write memory.
+template <class T>
+void escape(T* p) {
+  asm volatile("" : : "g"(p) : "memory");
+}

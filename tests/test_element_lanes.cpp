@@ -21,6 +21,7 @@
 #include "solver/elements/kinematics.hpp"
 #include "solver/materials/material_lanes.hpp"
 #include "tests/verification_meshes.hpp"
+#include "matrix_checks.hpp"
 
 using namespace ricochet;
 using namespace ricochet::verification;
@@ -111,7 +112,7 @@ Eigen::VectorXd field(const Model& model, double amplitude) {
   return a;
 }
 
-double max_abs(const Eigen::VectorXd& a) { return a.cwiseAbs().maxCoeff(); }
+using test_support::max_abs;
 
 }  // namespace
 

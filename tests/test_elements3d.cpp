@@ -23,6 +23,7 @@
 #include "harness/input/mesh_generators3.hpp"
 #include "solver/elements/element3d.hpp"
 #include "solver/model/mesh3.hpp"
+#include "matrix_checks.hpp"
 
 #include "alloc_counter.hpp"
 
@@ -134,14 +135,7 @@ Response cell_response(Kind kind, const Eigen::Matrix3Xd& x, const Material3& m,
   return r;
 }
 
-// Plain loops (Eigen's cwiseAbs().maxCoeff() on fixed sizes trips GCC 12's -Wuninitialized).
-template <class D>
-double max_abs(const Eigen::MatrixBase<D>& x) {
-  const typename D::PlainObject a = x;
-  double m = 0.0;
-  for (Eigen::Index i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a.data()[i]));
-  return m;
-}
+using test_support::max_abs;
 
 Mat3 random_rotation(std::mt19937& gen) {
   std::normal_distribution<double> n(0.0, 1.0);
@@ -1047,11 +1041,6 @@ TEST(Elements3d, GeometryRejectsInvertedCells) {
   EXPECT_FALSE(hex8_geometry(flat, hg));
   EXPECT_TRUE(hex8_geometry(unit_cube(), hg));
   EXPECT_TRUE(tet4_geometry(unit_tet(), tg));
-}
-
-template <class T>
-void escape(T* p) {
-  asm volatile("" : : "g"(p) : "memory");
 }
 
 TEST(Elements3d, KernelsDoNotAllocate) {

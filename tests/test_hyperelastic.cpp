@@ -22,6 +22,7 @@
 #include "harness/input/case_setup.hpp"
 #include "harness/input/input_error.hpp"
 #include "solver/materials/material.hpp"
+#include "matrix_checks.hpp"
 
 namespace ricochet {
 namespace {
@@ -89,13 +90,7 @@ Mat2 piola(const Material& m, const Mat2& f) {
 OutOfPlane out_of_plane(const Material& m, const Mat2& f) {
   return std::visit([&f](const auto& x) { return x.out_of_plane(f); }, m);
 }
-// A plain loop: Eigen's cwiseAbs().maxCoeff() on a 4x4 makes GCC 12 report a false
-// -Wuninitialized inside its AVX-512 headers.
-double max_abs(const Eigen::Matrix4d& a) {
-  double m = 0.0;
-  for (int i = 0; i < 16; ++i) m = std::max(m, std::abs(a.data()[i]));
-  return m;
-}
+using test_support::max_abs;
 
 // Plane-reduced first Lame constant.
 double plane_lambda(const Case& c) {

@@ -18,6 +18,7 @@
 
 #include "solver/materials/material.hpp"
 #include "solver/materials/material3d.hpp"
+#include "matrix_checks.hpp"
 
 #include "alloc_counter.hpp"
 
@@ -90,15 +91,7 @@ OutOfPlane out_of_plane(const Material& m, const Mat2& f) {
   return std::visit([&f](const auto& x) { return x.out_of_plane(f); }, m);
 }
 
-// Plain loops: Eigen's cwiseAbs().maxCoeff() on fixed sizes makes GCC 12 report false
-// -Wuninitialized inside its AVX-512 headers.
-template <class D>
-double max_abs(const Eigen::MatrixBase<D>& x) {
-  const typename D::PlainObject a = x;
-  double m = 0.0;
-  for (int i = 0; i < static_cast<int>(a.size()); ++i) m = std::max(m, std::abs(a.data()[i]));
-  return m;
-}
+using test_support::max_abs;
 
 // A rotation uniformly distributed over SO(3): a normalized Gaussian quaternion.
 Mat3 random_rotation(std::mt19937& gen) {
@@ -471,11 +464,6 @@ TEST(Hyperelastic3d, PlaneStrainIsThe3DLawAtUnitF33) {
                 "S33 %.2e, A %.2e\n",
                 c.name.c_str(), worst_w, worst_p, worst_s33, worst_a);
   }
-}
-
-template <class T>
-void escape(T* p) {
-  asm volatile("" : : "g"(p) : "memory");
 }
 
 TEST(Hyperelastic3d, EvaluationsDoNotAllocate) {

@@ -42,12 +42,6 @@ namespace {
 using verification::element_name;
 using verification::ElementKind;
 
-// Keeps the optimiser from removing an allocation whose result is otherwise unused.
-template <class T>
-void escape(T* p) {
-  asm volatile("" : : "g"(p) : "memory");
-}
-
 TEST(NoAllocation, CounterSeesEveryKindOfAllocation) {
   // The counter itself must work, or a zero below would prove nothing.
   long before = g_allocations.load();

@@ -37,6 +37,7 @@
 #include "harness/sweeps/reference_errors.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "summary_table.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -136,69 +137,8 @@ std::vector<std::string> ids(const std::vector<SweepRun>& runs) {
   return v;
 }
 
-// summary.csv as rows of column -> value (RFC 4180 quoting).
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::map<std::string, std::string>> rows;
-  const std::map<std::string, std::string>& row(const std::string& id) const {
-    for (const auto& r : rows)
-      if (r.at("run_id") == id) return r;
-    throw std::logic_error("no row " + id);
-  }
-};
-
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> out(1);
-  std::string cur;
-  bool quoted = false, fresh = true;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"' && fresh) {
-      quoted = true;
-    } else if (c == ',') {
-      out.back().push_back(cur);
-      cur.clear();
-      fresh = true;
-      continue;
-    } else if (c == '\n') {
-      out.back().push_back(cur);
-      cur.clear();
-      out.emplace_back();
-      fresh = true;
-      continue;
-    } else {
-      cur += c;
-    }
-    fresh = false;
-  }
-  if (out.back().empty()) out.pop_back();
-  return out;
-}
-
-Table read_table(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  const auto lines = parse_csv(s.str());
-  Table t;
-  if (lines.empty()) return t;
-  t.header = lines[0];
-  for (std::size_t i = 1; i < lines.size(); ++i) {
-    EXPECT_EQ(lines[i].size(), t.header.size()) << "row " << i;
-    std::map<std::string, std::string> r;
-    for (std::size_t c = 0; c < t.header.size() && c < lines[i].size(); ++c) r[t.header[c]] = lines[i][c];
-    t.rows.push_back(r);
-  }
-  return t;
-}
+using Table = test_support::SummaryTable;
+Table read_table(const fs::path& p) { return test_support::read_summary_table(p); }
 
 bool has_column(const Table& t, const std::string& c) {
   return std::find(t.header.begin(), t.header.end(), c) != t.header.end();
@@ -450,7 +390,7 @@ TEST(SummaryTable, UnionOfColumnsPlaceholdersAndNameClashes) {
       R"({"case":"c","scheme":"explicit","status":"diverged","diverged":{"reason":"energy growth","step":3},"probes":[],"final":{"time":0.5,"energy":9,"extra":1},"friction_coeff":null})"));
   SummaryRow failed{"g/002", "g", "run", "failed", "exit 2: ricochet: x, y", {{"scheme", "implicit"}, {"time.dt", "1e-3"}}, {}, {}};
   const std::string csv = format_summary_csv({ok, div, failed}, {{"scheme", "time.dt"}, {"repeats", "error_energy"}});
-  const auto lines = parse_csv(csv);
+  const auto lines = test_support::csv_records(csv);
   ASSERT_EQ(lines.size(), 4u);
   EXPECT_EQ(lines[0], (std::vector<std::string>{"run_id", "group", "kind", "status", "reason", "scheme", "time.dt", "case",
                                                 "summary.scheme", "diverged.reason", "diverged.step", "probes", "final.time",
@@ -1184,7 +1124,6 @@ reference = false
 
 namespace {
 
-
 // The tiny plate on a 40 x 20 mesh with one thread: a run of about a second per 0.1 s of
 // simulated time, long enough to be killed in the middle.
 std::string slow_case(double end) {
@@ -1270,7 +1209,7 @@ void expect_complete_run_folder(const fs::path& f) {
   for (const char* file : {"history.csv", "overrides.json", "stderr.txt"}) EXPECT_TRUE(fs::is_regular_file(f / file)) << file;
   const Json s = read_json_file(f / "summary.json");
   EXPECT_EQ(s.at("status").get<std::string>(), "ok");
-  const auto lines = parse_csv(text_of(f / "history.csv"));
+  const auto lines = test_support::csv_records(text_of(f / "history.csv"));
   ASSERT_GE(lines.size(), 2u);
   EXPECT_EQ(static_cast<long>(lines.size()) - 1, s.at("history_rows").get<long>());
   double last = -1.0;

@@ -37,6 +37,7 @@
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_shard.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "summary_table.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -122,61 +123,8 @@ std::string text_of(const fs::path& p) {
   return s.str();
 }
 
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> out(1);
-  std::string cur;
-  bool quoted = false, fresh = true;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"' && fresh) {
-      quoted = true;
-    } else if (c == ',' || c == '\n') {
-      out.back().push_back(cur);
-      cur.clear();
-      if (c == '\n') out.emplace_back();
-      fresh = true;
-      continue;
-    } else {
-      cur += c;
-    }
-    fresh = false;
-  }
-  if (out.back().empty()) out.pop_back();
-  return out;
-}
-
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  std::string cell(std::size_t row, const std::string& column) const {
-    const auto it = std::find(header.begin(), header.end(), column);
-    if (it == header.end()) throw std::logic_error("no column " + column);
-    return rows.at(row).at(static_cast<std::size_t>(it - header.begin()));
-  }
-  std::vector<std::string> ids() const {
-    std::vector<std::string> v;
-    for (std::size_t r = 0; r < rows.size(); ++r) v.push_back(cell(r, "run_id"));
-    return v;
-  }
-};
-
-Table read_table(const fs::path& p) {
-  const auto lines = parse_csv(text_of(p));
-  Table t;
-  if (lines.empty()) return t;
-  t.header = lines[0];
-  t.rows.assign(lines.begin() + 1, lines.end());
-  return t;
-}
+using Table = test_support::SummaryTable;
+Table read_table(const fs::path& p) { return test_support::read_summary_table(p); }
 
 // Two summary.csv files are the same table but for the timing columns: the same header, the same
 // rows in the same order, every other cell equal.
@@ -186,11 +134,9 @@ void expect_same_table(const fs::path& a, const fs::path& b) {
   ASSERT_EQ(x.ids(), y.ids());
   std::size_t compared = 0;
   for (std::size_t r = 0; r < x.rows.size(); ++r) {
-    ASSERT_EQ(x.rows[r].size(), x.header.size());
-    ASSERT_EQ(y.rows[r].size(), x.header.size());
-    for (std::size_t c = 0; c < x.header.size(); ++c) {
-      if (kTimingColumns.count(x.header[c])) continue;
-      EXPECT_EQ(x.rows[r][c], y.rows[r][c]) << x.rows[r][0] << " " << x.header[c];
+    for (const std::string& column : x.header) {
+      if (kTimingColumns.count(column)) continue;
+      EXPECT_EQ(x.cell(r, column), y.cell(r, column)) << x.cell(r, "run_id") << " " << column;
       ++compared;
     }
   }
@@ -709,7 +655,7 @@ cross = { "output.interval" = [1e-3, 2e-3, 4e-3, 5e-3] }
     const fs::path f = out() / "runs" / id;
     const Json s = read_json_file(f / "summary.json");
     EXPECT_EQ(t.cell(r, "written_at"), s.at("written_at").get<std::string>()) << id;
-    EXPECT_EQ(static_cast<long>(parse_csv(text_of(f / "history.csv")).size()) - 1, s.at("history_rows").get<long>()) << id;
+    EXPECT_EQ(static_cast<long>(test_support::csv_records(text_of(f / "history.csv")).size()) - 1, s.at("history_rows").get<long>()) << id;
     for (const auto& e : fs::directory_iterator(f)) {
       const std::string name = e.path().filename().string();
       EXPECT_EQ(name.find(".tmp"), std::string::npos) << id << ": " << name;

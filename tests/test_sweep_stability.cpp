@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -21,6 +22,7 @@
 #include "harness/outputs/json_io.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "summary_table.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -121,64 +123,8 @@ class SweepStabilityTest : public ::testing::Test {
   std::ostringstream log_;
 };
 
-// summary.csv as a header and rows of column -> value (RFC 4180 quoting).
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::map<std::string, std::string>> rows;
-  const std::map<std::string, std::string>& row(const std::string& id) const {
-    for (const auto& r : rows)
-      if (r.at("run_id") == id) return r;
-    throw std::logic_error("no row " + id);
-  }
-};
-
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> out(1);
-  std::string cur;
-  bool quoted = false, fresh = true;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"' && fresh) {
-      quoted = true;
-    } else if (c == ',' || c == '\n') {
-      out.back().push_back(cur);
-      cur.clear();
-      if (c == '\n') out.emplace_back();
-      fresh = true;
-      continue;
-    } else {
-      cur += c;
-    }
-    fresh = false;
-  }
-  if (out.back().empty()) out.pop_back();
-  return out;
-}
-
-Table read_table(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  const auto lines = parse_csv(s.str());
-  Table t;
-  if (lines.empty()) return t;
-  t.header = lines[0];
-  for (std::size_t i = 1; i < lines.size(); ++i) {
-    EXPECT_EQ(lines[i].size(), t.header.size()) << "row " << i;
-    std::map<std::string, std::string> r;
-    for (std::size_t c = 0; c < t.header.size() && c < lines[i].size(); ++c) r[t.header[c]] = lines[i][c];
-    t.rows.push_back(r);
-  }
-  return t;
-}
+using Table = test_support::SummaryTable;
+Table read_table(const fs::path& p) { return test_support::read_summary_table(p); }
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p);
@@ -239,7 +185,9 @@ TEST_F(SweepStabilityTest, RunsSearchesAndTablesThem) {
     EXPECT_LT(lo / est, 1.5);
     const std::size_t n = s.at("trials").size();
     EXPECT_EQ(r.at("trials"), std::to_string(n));
-    EXPECT_TRUE(fs::is_directory(folder / "trials" / (n < 10 ? "0" + std::to_string(n) : std::to_string(n))));
+    char trial[24];
+    std::snprintf(trial, sizeof trial, "%02zu", n);
+    EXPECT_TRUE(fs::is_directory(folder / "trials" / trial));
     // The reason of the trial at hi.
     std::string reason;
     for (const Json& tr : s.at("trials"))

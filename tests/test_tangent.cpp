@@ -28,6 +28,7 @@
 #include "solver/forces/internal_forces.hpp"
 #include "solver/forces/tangent.hpp"
 #include "verification_meshes.hpp"
+#include "matrix_checks.hpp"
 
 #include "alloc_counter.hpp"
 
@@ -44,11 +45,6 @@ constexpr double kYoung = 200e9;     // [Pa]
 constexpr double kPoisson = 0.3;     // [-]
 constexpr double kDensity = 7800.0;  // [kg/m^3]
 constexpr double kThickness = 0.01;  // [m]
-
-template <class T>
-void escape(T* p) {
-  asm volatile("" : : "g"(p) : "memory");
-}
 
 struct MaterialCase {
   std::string name;
@@ -90,15 +86,7 @@ std::vector<Mat2> random_deformations(int count, unsigned seed) {
   return out;
 }
 
-// max |m_ij| by a plain loop: Eigen's vectorised 4x4 reductions trip a GCC 12 false
-// -Wuninitialized inside its AVX-512 intrinsics headers.
-template <class Derived>
-double max_abs(const Eigen::MatrixBase<Derived>& expr) {
-  const typename Derived::PlainObject m = expr;
-  double r = 0.0;
-  for (Eigen::Index i = 0; i < m.size(); ++i) r = std::max(r, std::abs(m.data()[i]));
-  return r;
-}
+using test_support::max_abs;
 
 Eigen::Matrix4d fd_tangent(const Material& m, const Mat2& F, double h) {
   Eigen::Matrix4d a;
