@@ -25,8 +25,8 @@ void scheme_run(benchmark::State& state, const std::string& scheme, const std::s
   for (auto _ : state) {
     const RunResult r = run_case(pc);
     if (r.status != RunStatus::ok) fail(state, "run " + scheme + " " + mesh + " " + dt + ": " + r.reason);
-    state.SetIterationTime(r.wall_seconds);
-    state.counters["element_steps_per_second"] = r.element_steps_per_second;
+    state.SetIterationTime(r.timing.wall_seconds);
+    state.counters["element_steps_per_second"] = r.timing.element_steps_per_second;
     state.counters["energy_error_max"] = r.energy_error_max;
   }
 }

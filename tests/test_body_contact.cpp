@@ -265,7 +265,7 @@ TEST(BodyContact, ObliqueFrictionalImpactConservesMomentum) {
       ASSERT_LT(std::abs(py[i] - p0y), 1e-13 * std::abs(p0x)) << name(scheme) << " row " << i;
     }
     EXPECT_GT(r.friction_dissipation, 0.0) << name(scheme);
-    EXPECT_GE(r.contact_steps, 5) << name(scheme);  // contact lasts ~2h/c = 1.3e-4 s
+    EXPECT_GE(r.contact.steps, 5) << name(scheme);  // contact lasts ~2h/c = 1.3e-4 s
   }
 }
 
@@ -447,8 +447,8 @@ TEST(BodyContact, ImplicitUnconvergedContactIsCountedNotFatal) {
     im.uzawa_sweeps = 1;
     const RunResult r = run_implicit(h.model, h.settings, im);
     ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
-    EXPECT_GT(r.contact_unconverged_steps, 0);
-    EXPECT_LE(r.contact_unconverged_steps, r.contact_steps);
+    EXPECT_GT(r.contact.unconverged_steps, 0);
+    EXPECT_LE(r.contact.unconverged_steps, r.contact.steps);
     const auto px = column(r.history, "momentum_x"), py = column(r.history, "momentum_y");
     for (std::size_t i = 0; i < px.size(); ++i) {
       EXPECT_NEAR(px[i], px.front(), 1e-13 * h.mass);

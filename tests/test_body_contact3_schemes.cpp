@@ -146,7 +146,7 @@ TEST(BodyContact3Schemes, HeadOnBarsConserveMomentumAndFollowThe1DSolution) {
                 "(rho c v0 A / 2 = %.0f), last contact %.4e s (2L/c %.4e), penetration %.2e m, unconverged "
                 "steps %ld\n",
                 label.c_str(), r.dt, m.momentum_dev / p0, m.impulse / p0, m.plateau, force, m.last_contact, duration,
-                r.penetration_max, r.contact_unconverged_steps);
+                r.penetration_max, r.contact.unconverged_steps);
     // Round-off: a few ulps of the momentum per sample, not a modelling tolerance.
     EXPECT_LT(m.momentum_dev, 1e-13 * p0);
     // The striker's momentum p0 passed to the target (as in 2D: within 3 %).
@@ -218,18 +218,18 @@ TEST(BodyContact3Schemes, ObliqueFrictionalImpactConservesMomentum) {
       const double dev = o.momentum_deviation(r);
       std::printf("[oblique 3D %s%s] momentum deviation %.2e of |p0|, friction dissipation %.3e J, normal impulse "
                   "%.4e N s, tangential %.4e N s (ratio %.4f, mu %.1f), contact steps %ld, penetration %.2e m\n",
-                  name(scheme), tets ? " tet4" : "", dev / p0.norm(), r.friction_dissipation, r.contact_impulse_normal,
-                  r.contact_impulse_tangential, r.contact_impulse_tangential / r.contact_impulse_normal, mu,
-                  r.contact_steps, r.penetration_max);
+                  name(scheme), tets ? " tet4" : "", dev / p0.norm(), r.friction_dissipation, r.contact.impulse_normal,
+                  r.contact.impulse_tangential, r.contact.impulse_tangential / r.contact.impulse_normal, mu,
+                  r.contact.steps, r.penetration_max);
       EXPECT_LT(dev, 1e-13 * p0.norm());
       EXPECT_GT(r.friction_dissipation, 0.0);
-      EXPECT_GE(r.contact_steps, 5);
-      EXPECT_GT(r.contact_impulse_normal, 0.0);
-      EXPECT_LE(r.contact_impulse_tangential, mu * r.contact_impulse_normal * (1.0 + 1e-9));
+      EXPECT_GE(r.contact.steps, 5);
+      EXPECT_GT(r.contact.impulse_normal, 0.0);
+      EXPECT_LE(r.contact.impulse_tangential, mu * r.contact.impulse_normal * (1.0 + 1e-9));
       // The block comes in at |v_n| = 1 m/s with |v_t| = 2.06 m/s: a normal impulse of at most
       // 2 m |v_n| (an elastic rebound) allows a tangential one of 0.6 m, which cannot stop the
       // slip. It slides throughout, the tangential impulse at the cone's bound.
-      EXPECT_GT(r.contact_impulse_tangential, 0.9 * mu * r.contact_impulse_normal);
+      EXPECT_GT(r.contact.impulse_tangential, 0.9 * mu * r.contact.impulse_normal);
       // The frame (face, (xi, eta), normal) is frozen over a step while the corner node slides
       // tens of micrometres a step over a face that turns: the gap enforced is that of the
       // frozen frame, and the node ends up to ~1e-9 m (1e-7 of the 1 cm cells) inside the master.
@@ -262,12 +262,12 @@ TEST(BodyContact3Schemes, FrameUpdatesCloseTheFrozenFrameGap) {
       std::printf("[frame updates 3D %s, %d] penetration %.2e m, momentum deviation %.2e of |p0|, tangential/normal "
                   "impulse %.4f, friction dissipation %.4e J, unconverged steps %ld\n",
                   tets ? "tet4" : "hex8", updates, r.penetration_max, dev / p0.norm(),
-                  r.contact_impulse_tangential / r.contact_impulse_normal, r.friction_dissipation,
-                  r.contact_unconverged_steps);
+                  r.contact.impulse_tangential / r.contact.impulse_normal, r.friction_dissipation,
+                  r.contact.unconverged_steps);
       EXPECT_LT(dev, 1e-13 * p0.norm());
-      EXPECT_LE(r.contact_impulse_tangential, mu * r.contact_impulse_normal * (1.0 + 1e-9));
+      EXPECT_LE(r.contact.impulse_tangential, mu * r.contact.impulse_normal * (1.0 + 1e-9));
       EXPECT_GT(r.friction_dissipation, 0.0);
-      EXPECT_EQ(r.contact_unconverged_steps, 0);
+      EXPECT_EQ(r.contact.unconverged_steps, 0);
       if (updates == 0) {
         frozen = r.penetration_max;
         EXPECT_GT(frozen, 1e-10);  // the frozen frame's residual that the updates remove

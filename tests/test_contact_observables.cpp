@@ -42,18 +42,18 @@ TEST(ContactObservables, BarOnRigidWallImpulseDurationRebound) {
     // Impulse 2 m v0 = 1.28 N s. The wall's impulse is the change of momentum exactly (no other
     // horizontal force): check both against each other to round-off and against 2 m v0.
     const double dp = last(r.history, "momentum_x") - (-m * v0);
-    EXPECT_NEAR(r.contact_impulse_normal, dp, 1e-9 * dp) << scheme;
-    EXPECT_NEAR(r.contact_impulse_normal, 2.0 * m * v0, 0.01 * 2.0 * m * v0) << scheme;
-    EXPECT_EQ(r.contact_impulse_tangential, 0.0) << scheme;
+    EXPECT_NEAR(r.contact.impulse_normal, dp, 1e-9 * dp) << scheme;
+    EXPECT_NEAR(r.contact.impulse_normal, 2.0 * m * v0, 0.01 * 2.0 * m * v0) << scheme;
+    EXPECT_EQ(r.contact.impulse_tangential, 0.0) << scheme;
     // Rebound: +v0 (the final momentum over the mass).
     EXPECT_NEAR(last(r.history, "momentum_x") / r.total_mass, v0, 0.01 * v0) << scheme;
     // Contact from t = 0 for 2L/c; a penalty spring acts only once the node has penetrated,
     // one step later, and the springs add their delay.
     if (std::string(scheme) == "explicit_penalty")
-      EXPECT_NEAR(r.contact_first_time, r.dt, 1e-12) << scheme;
+      EXPECT_NEAR(r.contact.first_time, r.dt, 1e-12) << scheme;
     else
-      EXPECT_EQ(r.contact_first_time, 0.0) << scheme;
-    const double d = r.contact_last_time - r.contact_first_time;
+      EXPECT_EQ(r.contact.first_time, 0.0) << scheme;
+    const double d = r.contact.last_time - r.contact.first_time;
     const double tol = std::string(scheme) == "explicit_penalty" ? 0.15 : 0.03;
     EXPECT_NEAR(d, duration, tol * duration) << scheme;
   }
@@ -67,14 +67,14 @@ TEST(ContactObservables, FrictionlessPlateImpulseIsTheMomentumChange) {
   const double m = r.total_mass;
   EXPECT_NEAR(m, 0.5 * pc.model.mass.sum(), 1e-15);
   const double vy = last(r.history, "momentum_y") / m, vx = last(r.history, "momentum_x") / m;
-  EXPECT_NEAR(r.contact_impulse_normal, m * (vy - (-5.0)), 1e-9 * m * 5.0);
-  EXPECT_EQ(r.contact_impulse_tangential, 0.0);
+  EXPECT_NEAR(r.contact.impulse_normal, m * (vy - (-5.0)), 1e-9 * m * 5.0);
+  EXPECT_EQ(r.contact.impulse_tangential, 0.0);
   EXPECT_NEAR(vx, 3.0, 1e-12);
   EXPECT_GT(vy, 4.0);  // it bounces: about 4.73 m/s on M2x4, nearly elastic
   // The plate touches at t = 0 and leaves before the end (3 ms).
-  EXPECT_EQ(r.contact_first_time, 0.0);
-  EXPECT_GT(r.contact_last_time, 1.5e-3);
-  EXPECT_LT(r.contact_last_time, 2.9e-3);
+  EXPECT_EQ(r.contact.first_time, 0.0);
+  EXPECT_GT(r.contact.last_time, 1.5e-3);
+  EXPECT_LT(r.contact.last_time, 2.9e-3);
 }
 
 // The per-step count of status changes (history contact_status_changes), in every scheme, on the
@@ -109,8 +109,8 @@ TEST(ContactObservables, StatusChangesBoundTheCountChanges) {
     EXPECT_LT(last_change, static_cast<long>(h.rows()) - 10) << scheme << ": no changes in free flight";
     // The run's totals (summary.json contact_iterations.status_changes, status_change_steps)
     // are the sums over every step: here every step is a history row.
-    EXPECT_EQ(static_cast<double>(r.contact_status_changes), total) << scheme;
-    EXPECT_EQ(r.contact_status_change_steps, steps_with_changes) << scheme;
+    EXPECT_EQ(static_cast<double>(r.contact.status_changes), total) << scheme;
+    EXPECT_EQ(r.contact.status_change_steps, steps_with_changes) << scheme;
   }
 }
 

@@ -145,7 +145,7 @@ TEST(Explicit3, BarOnRigidWallImplicit) {
     std::printf("[bar3 implicit %s] plateau %.2f N (rho c v0 A %.0f), last contact %.4e s (2L/c %.4e), final "
                 "p_x %.6f (m v0 %.6f), energy error %.3e, penetration %.2e m, Newton iterations %ld\n",
                 test3::kind_name(kind), b.mean, force, b.last_contact, duration, b.momentum_end, m * kV0,
-                r.energy_error_max, r.penetration_max, r.newton_iterations);
+                r.energy_error_max, r.penetration_max, r.implicit.newton_iterations);
     EXPECT_NEAR(b.mean, force, 0.02 * force);
     EXPECT_NEAR(b.last_contact, duration, 0.02 * duration);
     EXPECT_NEAR(b.momentum_end, m * kV0, 0.02 * m * kV0);
@@ -264,7 +264,7 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
     }
     const RunResult &a = results[0], &b = results[1];
     ASSERT_EQ(a.history.rows(), b.history.rows());
-    ASSERT_GT(a.contact_steps, 0);
+    ASSERT_GT(a.contact.steps, 0);
     ASSERT_GT(a.friction_dissipation, 0.0);
     double worst = 0.0;
     for (const char* col : {"kinetic_energy", "strain_energy", "friction_dissipation", "contact_work"}) {
@@ -287,7 +287,7 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
     }
     std::printf("[oblique3 %s] contact steps %ld, friction dissipation %.6e J, E0 %.6e J, energy error %.2e, "
                 "worst relative energy difference rotated/unrotated %.2e, |Q p - p_rot| %.2e of %.3e\n",
-                penalty ? "penalty" : "semi-explicit", a.contact_steps, a.friction_dissipation, a.initial_energy,
+                penalty ? "penalty" : "semi-explicit", a.contact.steps, a.friction_dissipation, a.initial_energy,
                 a.energy_error_max, worst, (q * pa - pb).norm(), pa.norm());
     EXPECT_LE((q * pa - pb).norm(), 1e-9 * pa.norm());
     EXPECT_NEAR(a.friction_dissipation, b.friction_dissipation, 1e-9 * a.friction_dissipation);

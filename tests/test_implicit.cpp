@@ -115,8 +115,8 @@ TEST(Implicit, TrapezoidalConservesEnergyAtAnyStep) {
                 "error max %.3e (final %.3e), x2 amplitude %.3e, ratio %.3f; Newton %ld, CG %ld\n",
                 c.factor, a.result.steps, a.tip_crossings, a.result.energy_error_max,
                 a.result.history.at(a.result.history.rows() - 1, a.result.history.column("energy_error")),
-                b.result.energy_error_max, ratio, a.result.newton_iterations,
-                a.result.linear_iterations);
+                b.result.energy_error_max, ratio, a.result.implicit.newton_iterations,
+                a.result.implicit.linear_iterations);
     EXPECT_LT(a.result.energy_error_max, c.bound) << "dt = " << c.factor << " x critical";
     EXPECT_GT(ratio, 1.9);
     EXPECT_LT(ratio, 2.1);
@@ -325,8 +325,8 @@ TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
       ASSERT_EQ(runs.back().status, RunStatus::ok) << runs.back().reason;
       ASSERT_EQ(runs.back().fields.size(), 2u);
     }
-    EXPECT_GT(runs[0].linear_iterations, 0);   // PCG did iterate
-    EXPECT_EQ(runs[1].linear_iterations, 0);   // the direct solver counts no CG iterations
+    EXPECT_GT(runs[0].implicit.linear_iterations, 0);   // PCG did iterate
+    EXPECT_EQ(runs[1].implicit.linear_iterations, 0);   // the direct solver counts no CG iterations
     for (std::size_t f = 0; f < 2; ++f) {
       const FieldSnapshot& a = runs[0].fields[f];
       const FieldSnapshot& b = runs[1].fields[f];
@@ -378,11 +378,11 @@ TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
     const RunResult &full = runs[0], &modified = runs[1], &every = runs[2];
     std::printf("[implicit] dt = %.1f x crit: full Newton %ld iterations, %ld factorizations; modified "
                 "%ld iterations, %ld factorizations\n",
-                factor, full.newton_iterations, full.factorizations, modified.newton_iterations,
-                modified.factorizations);
-    EXPECT_EQ(full.factorizations, full.newton_iterations);
-    EXPECT_EQ(every.factorizations, every.newton_iterations - every.steps + 1);
-    EXPECT_LT(modified.factorizations, modified.newton_iterations / 2);
+                factor, full.implicit.newton_iterations, full.implicit.factorizations, modified.implicit.newton_iterations,
+                modified.implicit.factorizations);
+    EXPECT_EQ(full.implicit.factorizations, full.implicit.newton_iterations);
+    EXPECT_EQ(every.implicit.factorizations, every.implicit.newton_iterations - every.steps + 1);
+    EXPECT_LT(modified.implicit.factorizations, modified.implicit.newton_iterations / 2);
     double dv_loose_max = 0.0;
     for (std::size_t f = 0; f < 2; ++f) {
       const FieldSnapshot& a = full.fields[f];

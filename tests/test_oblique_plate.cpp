@@ -57,16 +57,16 @@ const PlateRun& plate_run(const std::string& mesh, double dt, double mu) {
               "wall %.2f s\n",
               mesh.c_str(), dt, mu, r.status == RunStatus::ok ? "ok" : "diverged", r.steps,
               r.planned_steps, run.prepared.model.critical_dt, r.energy_error_max,
-              r.von_mises_max, r.von_mises_max_time, r.penetration_max, r.friction_dissipation,
-              r.contact_work, r.initial_energy, r.contact_sweeps_mean, r.contact_sweeps_max,
-              r.wall_seconds);
+              r.stress.von_mises_max, r.stress.von_mises_max_time, r.penetration_max, r.friction_dissipation,
+              r.contact_work, r.initial_energy, r.contact.sweeps_mean, r.contact.sweeps_max,
+              r.timing.wall_seconds);
   if (r.status != RunStatus::ok) std::printf("[plate]   reason: %s\n", r.reason.c_str());
   return cache.emplace(key, std::move(run)).first->second;
 }
 
 void record(const std::string& prefix, const RunResult& r) {
   ::testing::Test::RecordProperty(prefix + "_energy_error_max", number(r.energy_error_max));
-  ::testing::Test::RecordProperty(prefix + "_von_mises_max", number(r.von_mises_max));
+  ::testing::Test::RecordProperty(prefix + "_von_mises_max", number(r.stress.von_mises_max));
   ::testing::Test::RecordProperty(prefix + "_penetration_max", number(r.penetration_max));
   ::testing::Test::RecordProperty(prefix + "_friction_dissipation", number(r.friction_dissipation));
 }
@@ -80,8 +80,8 @@ void expect_frictionless_run_ok(const PlateRun& run) {
   EXPECT_EQ(r.steps, r.planned_steps);
   EXPECT_LE(r.penetration_max, 1e-9);
   EXPECT_LT(r.energy_error_max, 0.02);
-  EXPECT_EQ(r.contact_unconverged_steps, 0);
-  EXPECT_GT(r.contact_steps, 0);
+  EXPECT_EQ(r.contact.unconverged_steps, 0);
+  EXPECT_GT(r.contact.steps, 0);
   EXPECT_EQ(r.friction_dissipation, 0.0);
 }
 
@@ -153,7 +153,7 @@ TEST(ObliquePlate, FrictionSlowsTheRebound) {
   EXPECT_GT(r.friction_dissipation, 0.0);
   EXPECT_LT(r.energy_error_max, 0.02);
   EXPECT_LE(r.penetration_max, 1e-9);
-  EXPECT_EQ(r.contact_unconverged_steps, 0);
+  EXPECT_EQ(r.contact.unconverged_steps, 0);
 
   // The rebound: the rows after the last row with a contact node.
   const History& h = r.history;

@@ -79,7 +79,7 @@ const SchemeRun& scheme_run(const std::string& scheme, double mu, double dt = 0.
               r.status == RunStatus::ok ? "ok" : "diverged", r.steps, r.planned_steps,
               r.penetration_max, r.energy_error_max, r.contact_work / r.initial_energy,
               r.friction_dissipation / r.initial_energy,
-              h.rows() > 0 ? h.at(run.last_contact, 0) : 0.0, run.vx, run.vy, r.wall_seconds);
+              h.rows() > 0 ? h.at(run.last_contact, 0) : 0.0, run.vx, run.vy, r.timing.wall_seconds);
   if (r.status != RunStatus::ok) std::printf("[schemes]   reason: %s\n", r.reason.c_str());
   return cache.emplace(key, std::move(run)).first->second;
 }
@@ -111,8 +111,8 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
       const PreparedCase& pc = run.prepared;
       ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
       EXPECT_EQ(r.steps, r.planned_steps);
-      EXPECT_GT(r.contact_steps, 0);
-      EXPECT_EQ(r.contact_unconverged_steps, 0);
+      EXPECT_GT(r.contact.steps, 0);
+      EXPECT_EQ(r.contact.unconverged_steps, 0);
       EXPECT_LT(r.energy_error_max, 0.02);
       // The summary's penetration is the history's.
       const History& h = r.history;
@@ -244,14 +244,14 @@ TEST(Schemes, ImplicitIsStableAtTenTimesTheExplicitLimit) {
     ASSERT_EQ(big.result.status, RunStatus::ok) << big.result.reason;
     EXPECT_EQ(big.result.steps, 30);
     EXPECT_LE(big.result.penetration_max, 1e-9);
-    EXPECT_EQ(big.result.contact_unconverged_steps, 0);
+    EXPECT_EQ(big.result.contact.unconverged_steps, 0);
     EXPECT_LT(big.result.energy_error_max, 0.02);
     EXPECT_NEAR(big.vy, ref.vy, 0.1);
     EXPECT_NEAR(big.vx, ref.vx, 0.1);
     std::printf("[schemes] implicit dt 1e-4 mu %.1f: energy error max %.3e, v_cm (%.4f, %.4f) vs "
                 "(%.4f, %.4f) at 1e-5; Newton iterations %ld\n",
                 mu, big.result.energy_error_max, big.vx, big.vy, ref.vx, ref.vy,
-                big.result.newton_iterations);
+                big.result.implicit.newton_iterations);
   }
 }
 
@@ -379,7 +379,7 @@ TEST(Schemes, HistoryColumnsMeanTheSameInEveryScheme) {
       EXPECT_EQ(r.contact_work, wc);
       EXPECT_EQ(r.friction_dissipation, d_end);
       EXPECT_EQ(r.energy_error_max, err_max);
-      EXPECT_EQ(r.contact_steps, contact_rows);
+      EXPECT_EQ(r.contact.steps, contact_rows);
     }
 }
 

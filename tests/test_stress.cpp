@@ -126,24 +126,24 @@ TEST(StressPeaks, VonMisesMaxIndependentOfOutputInterval) {
     const PlateRun sampled = plate({m, "output.interval=1e-3", "output.stress_every_step=false"});
     const RunResult &a = fine.result, &b = coarse.result;
     ASSERT_EQ(a.status, RunStatus::ok);
-    EXPECT_NEAR(b.von_mises_max, a.von_mises_max, 1e-3 * a.von_mises_max) << measure;
-    EXPECT_EQ(b.von_mises_max_time, a.von_mises_max_time) << measure;
-    EXPECT_NEAR(b.von_mises_interior_peak.value, a.von_mises_interior_peak.value, 1e-3 * a.von_mises_max) << measure;
+    EXPECT_NEAR(b.stress.von_mises_max, a.stress.von_mises_max, 1e-3 * a.stress.von_mises_max) << measure;
+    EXPECT_EQ(b.stress.von_mises_max_time, a.stress.von_mises_max_time) << measure;
+    EXPECT_NEAR(b.stress.interior_peak.value, a.stress.interior_peak.value, 1e-3 * a.stress.von_mises_max) << measure;
     // Every step was sampled in the fine run: its largest history value is the peak itself.
     const History& h = a.history;
     double hist_max = 0.0;
     for (std::size_t r = 0; r < h.rows(); ++r) hist_max = std::max(hist_max, h.at(r, h.column("von_mises_max")));
-    EXPECT_NEAR(hist_max, a.von_mises_max, 1e-12 * a.von_mises_max) << measure;
+    EXPECT_NEAR(hist_max, a.stress.von_mises_max, 1e-12 * a.stress.von_mises_max) << measure;
     // The sampled maximum of a 1 ms interval misses the peak by far more than 0.1 %.
-    EXPECT_LT(sampled.result.von_mises_max, 0.98 * a.von_mises_max) << measure;
+    EXPECT_LT(sampled.result.stress.von_mises_max, 0.98 * a.stress.von_mises_max) << measure;
     // Where: a cell of the plate, inside its bounding box at that time, interior peak no larger.
-    EXPECT_EQ(a.von_mises_peak.body, 0);
-    EXPECT_GE(a.von_mises_peak.element, 0);
-    EXPECT_LT(a.von_mises_peak.element, fine.prepared.model.num_cells());
-    EXPECT_GT(a.von_mises_peak.y, -1e-3);
-    EXPECT_LT(a.von_mises_peak.y, 0.09);
-    EXPECT_LE(a.von_mises_interior_peak.value, a.von_mises_peak.value);
-    EXPECT_GT(a.von_mises_interior_peak.value, 0.0);
+    EXPECT_EQ(a.stress.peak.body, 0);
+    EXPECT_GE(a.stress.peak.element, 0);
+    EXPECT_LT(a.stress.peak.element, fine.prepared.model.num_cells());
+    EXPECT_GT(a.stress.peak.y, -1e-3);
+    EXPECT_LT(a.stress.peak.y, 0.09);
+    EXPECT_LE(a.stress.interior_peak.value, a.stress.peak.value);
+    EXPECT_GT(a.stress.interior_peak.value, 0.0);
   }
 }
 

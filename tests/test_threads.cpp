@@ -155,18 +155,18 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
       results.push_back(run_case(pc, [&](long, long, double) { inside.push_back(omp_get_max_threads()); }));
       const RunResult& r = results.back();
       EXPECT_EQ(omp_get_max_threads(), 5) << "the caller's count is restored";
-      EXPECT_EQ(r.threads, threads);
+      EXPECT_EQ(r.timing.threads, threads);
       ASSERT_FALSE(inside.empty());
       for (const int n : inside) EXPECT_EQ(n, threads);
       ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
-      EXPECT_GT(r.contact_steps, 0) << "the block must reach the line";
+      EXPECT_GT(r.contact.steps, 0) << "the block must reach the line";
     }
     const RunResult &a = results[0], &b = results[1];
     ASSERT_EQ(a.history.columns, b.history.columns);
     ASSERT_EQ(a.history.values.size(), b.history.values.size());
     EXPECT_EQ(std::memcmp(a.history.values.data(), b.history.values.data(), a.history.values.size() * sizeof(double)), 0)
         << "history differs between 1 and 2 threads";
-    EXPECT_EQ(std::memcmp(&a.von_mises_max, &b.von_mises_max, sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&a.stress.von_mises_max, &b.stress.von_mises_max, sizeof(double)), 0);
     EXPECT_EQ(std::memcmp(&a.friction_dissipation, &b.friction_dissipation, sizeof(double)), 0);
     EXPECT_EQ(a.steps, b.steps);
     EXPECT_EQ(a.dt_min, b.dt_min);
@@ -181,7 +181,7 @@ TEST_F(Threads, DefaultRunUsesEveryCore) {
   const PreparedCase pc = prepare_case(read_case(file.string(), {"scheme=semi_explicit", "time.end=1e-4"}));
   fs::remove(file);
   EXPECT_EQ(pc.settings.threads, 0);
-  EXPECT_EQ(run_case(pc).threads, omp_get_num_procs());
+  EXPECT_EQ(run_case(pc).timing.threads, omp_get_num_procs());
 }
 
 namespace {
@@ -245,8 +245,8 @@ TEST_F(Threads, AdaptingRunGivesThreadsUpWhileOthersHoldTheCores) {
   std::vector<int> inside;
   const RunResult r = run_case(adapting, [&](long, long, double) { inside.push_back(omp_get_max_threads()); });
   ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
-  EXPECT_EQ(r.threads, 2);
-  EXPECT_EQ(r.threads_min, 1);
+  EXPECT_EQ(r.timing.threads, 2);
+  EXPECT_EQ(r.timing.threads_min, 1);
   ASSERT_FALSE(inside.empty());
   EXPECT_EQ(inside.front(), 1) << "the load is read before the first step";
   ASSERT_EQ(r.history.values.size(), reference.history.values.size());
@@ -256,6 +256,6 @@ TEST_F(Threads, AdaptingRunGivesThreadsUpWhileOthersHoldTheCores) {
 
   std::vector<int> fixed_inside;
   const RunResult f = run_case(fixed, [&](long, long, double) { fixed_inside.push_back(omp_get_max_threads()); });
-  EXPECT_EQ(f.threads_min, 2);
+  EXPECT_EQ(f.timing.threads_min, 2);
   for (const int n : fixed_inside) EXPECT_EQ(n, 2);
 }

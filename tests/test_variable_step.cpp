@@ -440,10 +440,10 @@ TEST(VariableStep, SemiExplicitImpactWithAShrinkingStep) {
                 "|E - E0 - W_c| / E0 max %.3e, at the end %.3e, energy error max %.3e, W_c / E0 %.3f, D / E0 %.3f, "
                 "contact %.3e .. %.3e s\n",
                 interval, r.steps, r.dt_min, r.dt_max, r.penetration_max, worst, final_residual, r.energy_error_max,
-                r.contact_work / r.initial_energy, r.friction_dissipation / r.initial_energy, r.contact_first_time,
-                r.contact_last_time);
+                r.contact_work / r.initial_energy, r.friction_dissipation / r.initial_energy, r.contact.first_time,
+                r.contact.last_time);
     EXPECT_LE(r.penetration_max, 1e-12 * 0.04);
-    EXPECT_GT(r.contact_steps, 20);
+    EXPECT_GT(r.contact.steps, 20);
     if (interval == 1) {
       EXPECT_LT(r.dt_min, 0.9 * r.dt_max) << "the step must shrink by more than 10 % during the impact";
       EXPECT_EQ(r.end_time, s.end_time);

@@ -247,11 +247,11 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     Json im = Json::object();
     im["theta"] = pc.spec.implicit.theta;
     im["xi"] = pc.spec.implicit.xi;
-    im["newton_iterations"] = r.newton_iterations;
-    im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.newton_iterations) / r.steps : 0.0;
-    im["linear_iterations"] = r.linear_iterations;
-    im["linear_solver"] = r.direct_solver ? "direct" : "pcg";
-    im["factorizations"] = r.factorizations;
+    im["newton_iterations"] = r.implicit.newton_iterations;
+    im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.implicit.newton_iterations) / r.steps : 0.0;
+    im["linear_iterations"] = r.implicit.linear_iterations;
+    im["linear_solver"] = r.implicit.direct_solver ? "direct" : "pcg";
+    im["factorizations"] = r.implicit.factorizations;
     j["implicit"] = im;
   } else {
     j["implicit"] = nullptr;
@@ -265,11 +265,11 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     j["penalty_soft_scale"] = nullptr;
     j["penalty_soft_dt"] = nullptr;
   }
-  j["threads"] = r.threads;
-  j["threads_min"] = r.threads_min;
-  j["wall_seconds"] = r.wall_seconds;
-  j["cpu_seconds"] = r.cpu_seconds;
-  j["element_steps_per_second"] = r.element_steps_per_second;
+  j["threads"] = r.timing.threads;
+  j["threads_min"] = r.timing.threads_min;
+  j["wall_seconds"] = r.timing.wall_seconds;
+  j["cpu_seconds"] = r.timing.cpu_seconds;
+  j["element_steps_per_second"] = r.timing.element_steps_per_second;
   j["initial_energy"] = r.initial_energy;
   j["energy_error_max"] = r.energy_error_max;
   j["penetration_max"] = r.penetration_max;
@@ -305,45 +305,45 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     for (int k = 0; k < kStressMeasures; ++k) m[stress_measure_name(static_cast<StressMeasure>(k))] = maxima[k];
     return m;
   };
-  j["stress_measure"] = stress_measure_name(r.stress_measure);
+  j["stress_measure"] = stress_measure_name(r.stress.measure);
   j["stress_every_step"] = pc.settings.stress_every_step;
-  j["von_mises_max"] = r.von_mises_max;
-  j["von_mises_max_time"] = r.von_mises_max_time;
-  j["von_mises_max_at"] = where(r.von_mises_peak);
-  j["von_mises_interior_max"] = r.von_mises_interior_peak.value;
-  j["von_mises_interior_max_time"] = r.von_mises_interior_peak.time;
-  j["von_mises_interior_max_at"] = where(r.von_mises_interior_peak);
-  j["von_mises_sampled_max"] = by_measure(r.von_mises_sampled_max);
+  j["von_mises_max"] = r.stress.von_mises_max;
+  j["von_mises_max_time"] = r.stress.von_mises_max_time;
+  j["von_mises_max_at"] = where(r.stress.peak);
+  j["von_mises_interior_max"] = r.stress.interior_peak.value;
+  j["von_mises_interior_max_time"] = r.stress.interior_peak.time;
+  j["von_mises_interior_max_at"] = where(r.stress.interior_peak);
+  j["von_mises_sampled_max"] = by_measure(r.stress.sampled_max);
   j["total_mass"] = r.total_mass;
-  j["contact_impulse_normal"] = r.contact_impulse_normal;
-  j["contact_impulse_tangential"] = r.contact_impulse_tangential;
-  const bool touched = r.contact_first_time >= 0.0;
-  j["contact_start_time"] = touched ? Json(r.contact_first_time) : Json();
-  j["contact_end_time"] = touched ? Json(r.contact_last_time) : Json();
-  j["contact_duration"] = touched ? Json(r.contact_last_time - r.contact_first_time) : Json();
+  j["contact_impulse_normal"] = r.contact.impulse_normal;
+  j["contact_impulse_tangential"] = r.contact.impulse_tangential;
+  const bool touched = r.contact.first_time >= 0.0;
+  j["contact_start_time"] = touched ? Json(r.contact.first_time) : Json();
+  j["contact_end_time"] = touched ? Json(r.contact.last_time) : Json();
+  j["contact_duration"] = touched ? Json(r.contact.last_time - r.contact.first_time) : Json();
   // The mean normal contact force while in contact, the normal impulse over the time with an
   // active contact [N], and the largest summed normal force of the history samples [N].
   const double contact_time =
-      r.dt_update_interval > 0 ? r.contact_time : static_cast<double>(r.contact_steps) * r.dt;
-  j["contact_force_mean"] = contact_time > 0.0 ? Json(r.contact_impulse_normal / contact_time) : Json();
+      r.dt_update_interval > 0 ? r.contact.time : static_cast<double>(r.contact.steps) * r.dt;
+  j["contact_force_mean"] = contact_time > 0.0 ? Json(r.contact.impulse_normal / contact_time) : Json();
   double force_max = 0.0;
   if (r.history.rows() > 0)
     for (std::size_t i = 0, col = r.history.column("normal_force"); i < r.history.rows(); ++i)
       force_max = std::max(force_max, r.history.at(i, col));
   j["contact_force_max"] = force_max;
   Json ci = Json::object();
-  ci["mean"] = r.contact_sweeps_mean;
-  ci["max"] = r.contact_sweeps_max;
-  ci["steps_with_contact"] = r.contact_steps;
+  ci["mean"] = r.contact.sweeps_mean;
+  ci["max"] = r.contact.sweeps_max;
+  ci["steps_with_contact"] = r.contact.steps;
   // The time with at least one active contact, steps x dt [s] (with a variable step the sum of
   // those steps): a contact duration that gates can compare across time steps and meshes.
-  ci["contact_time"] = r.dt_update_interval > 0 ? r.contact_time : static_cast<double>(r.contact_steps) * r.dt;
-  ci["unconverged_steps"] = r.contact_unconverged_steps;
+  ci["contact_time"] = r.dt_update_interval > 0 ? r.contact.time : static_cast<double>(r.contact.steps) * r.dt;
+  ci["unconverged_steps"] = r.contact.unconverged_steps;
   // Chatter of the active set: status changes (open, stick, slip) summed over every step, and
   // the steps that had any.
-  ci["status_changes"] = r.contact_status_changes;
-  ci["status_change_steps"] = r.contact_status_change_steps;
-  ci["candidates"] = r.contact_candidates;
+  ci["status_changes"] = r.contact.status_changes;
+  ci["status_change_steps"] = r.contact.status_change_steps;
+  ci["candidates"] = r.contact.candidates;
   j["contact_iterations"] = ci;
   const History& h = r.history;
   if (h.rows() > 0) {
@@ -471,8 +471,8 @@ std::string one_line_summary(const PreparedCase& pc, const RunResult& r, const s
                 "%s: %s  t=%.4g s  %ld steps of %.4g s  %d cells  %.3g s wall  %.3g element-steps/s"
                 "  energy_error_max=%.3g  penetration_max=%.3g m  von_mises_max=%.4g Pa",
                 pc.spec.name.c_str(), r.status == RunStatus::ok ? "ok" : "DIVERGED", r.end_time,
-                r.steps, r.dt, with_model(pc, [](const auto& m) { return m.num_cells(); }), r.wall_seconds, r.element_steps_per_second,
-                r.energy_error_max, r.penetration_max, r.von_mises_max);
+                r.steps, r.dt, with_model(pc, [](const auto& m) { return m.num_cells(); }), r.timing.wall_seconds, r.timing.element_steps_per_second,
+                r.energy_error_max, r.penetration_max, r.stress.von_mises_max);
   std::string s = buf;
   if (r.dt_update_interval > 0) {
     std::snprintf(buf, sizeof buf, " (variable: %.4g ... %.4g s)", r.dt_min, r.dt_max);

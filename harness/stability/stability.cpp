@@ -111,7 +111,7 @@ StabilityTrial judge_trial(const RunResult& r, const StabilityOptions& opt) {
       // a history without the energy columns: gain and loss stay 0
     }
   }
-  t.wall_seconds = r.wall_seconds;
+  t.wall_seconds = r.timing.wall_seconds;
   if (r.status != RunStatus::ok) {
     t.stable = false;
     t.reason = "diverged: " + r.reason;

@@ -19,8 +19,8 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
   // The whole run, set-up included, uses the run's thread count.
   ThreadScope threads(settings.threads, settings.adapt_threads);
   RunResult result;
-  result.threads = threads.threads();
-  result.threads_min = threads.threads_min();
+  result.timing.threads = threads.threads();
+  result.timing.threads_min = threads.threads_min();
   State s = initial_state(model, settings.prescribed, settings.dt, settings.initial_displacement, settings.loads);
   // E_0 from the initial conditions themselves: the reconstructed v_0 of step 0 already holds
   // half of any contact impulse of the first step.
@@ -109,7 +109,7 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
   }
   monitor.finish(s);
   steps.report(result);
-  result.threads_min = threads.threads_min();
+  result.timing.threads_min = threads.threads_min();
   return result;
 }
 

@@ -643,8 +643,8 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   // The whole run, the integrator's set-up included, uses the run's thread count.
   ThreadScope threads(settings.threads, settings.adapt_threads);
   RunResult result;
-  result.threads = threads.threads();
-  result.threads_min = threads.threads_min();
+  result.timing.threads = threads.threads();
+  result.timing.threads_min = threads.threads_min();
   // A quasi-static start (relaxation.hpp): relaxed with the semi-explicit loop and the same
   // bi-potential contact law, the run starts from the relaxed displacement.
   result.relaxed = settings.relaxation.enabled;
@@ -664,7 +664,7 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   if (!relaxed_ok) {
     monitor.diverge(s, "relaxation: " + result.relaxation.reason);
     monitor.finish(s);
-    result.direct_solver = integrator.direct_solver();
+    result.implicit.direct_solver = integrator.direct_solver();
     return result;
   }
   for (;;) {
@@ -689,11 +689,11 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
     }
   }
   monitor.finish(s);
-  result.threads_min = threads.threads_min();
-  result.newton_iterations = integrator.newton_iterations_total();
-  result.linear_iterations = integrator.linear_iterations_total();
-  result.direct_solver = integrator.direct_solver();
-  result.factorizations = integrator.factorizations();
+  result.timing.threads_min = threads.threads_min();
+  result.implicit.newton_iterations = integrator.newton_iterations_total();
+  result.implicit.linear_iterations = integrator.linear_iterations_total();
+  result.implicit.direct_solver = integrator.direct_solver();
+  result.implicit.factorizations = integrator.factorizations();
   return result;
 }
 

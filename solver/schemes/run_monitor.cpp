@@ -237,9 +237,9 @@ RunMonitorT<M>::RunMonitorT(const M& model, const RunSettings& settings, RunResu
   contact_cell_ = contact_boundary_cells(model, settings, contact.candidates);
   tracking_.contact_cell = contact_cell_.data();
   tracking_.measure = settings.stress_measure;
-  result.stress_measure = settings.stress_measure;
+  result.stress.measure = settings.stress_measure;
   result.total_mass = model.mass.sum() / M::kDim;
-  result.contact_candidates = static_cast<int>(contact.candidates.size());
+  result.contact.candidates = static_cast<int>(contact.candidates.size());
   // The rest window of `drift`: up to the first time a nodal load changes.
   result.rest_until = settings.end_time;
   for (const NodalLoad& l : settings.loads)
@@ -313,7 +313,7 @@ const StressTracking* RunMonitorT<M>::stress_tracking(long n) {
   const bool sample = sample_at(n);
   const bool field = field_at(n);
   if (!sample && !field && !settings_.stress_every_step) return nullptr;
-  const double peak = result_.von_mises_interior_peak.value;
+  const double peak = result_.stress.interior_peak.value;
   // A field snapshot between samples without per-step tracking ranks nothing: von_mises_max
   // then stays a maximum over the samples (RunSettings::stress_every_step).
   tracking_.threshold = sample                        ? 0.0
@@ -333,16 +333,16 @@ void RunMonitorT<M>::track_stress(const State& s, const StressPeaks& peaks) {
   if (!tracking_.sampled_max && !settings_.stress_every_step) return;  // a field snapshot's pass alone
   last_peaks_ = peaks;
   const double all = std::sqrt(peaks.all), interior = std::sqrt(peaks.interior);
-  if (peaks.all_cell >= 0 && all > result_.von_mises_peak.value) {
-    StressPeak& p = result_.von_mises_peak;
+  if (peaks.all_cell >= 0 && all > result_.stress.peak.value) {
+    StressPeak& p = result_.stress.peak;
     p.value = all;
     p.time = s.time;
     locate_cell(model_, s, peaks.all_cell, p);
-    result_.von_mises_max = p.value;
-    result_.von_mises_max_time = p.time;
+    result_.stress.von_mises_max = p.value;
+    result_.stress.von_mises_max_time = p.time;
   }
-  if (peaks.interior_cell >= 0 && interior > result_.von_mises_interior_peak.value) {
-    StressPeak& p = result_.von_mises_interior_peak;
+  if (peaks.interior_cell >= 0 && interior > result_.stress.interior_peak.value) {
+    StressPeak& p = result_.stress.interior_peak;
     p.value = interior;
     p.time = s.time;
     locate_cell(model_, s, peaks.interior_cell, p);
@@ -352,12 +352,12 @@ void RunMonitorT<M>::track_stress(const State& s, const StressPeaks& peaks) {
 template <class M>
 void RunMonitorT<M>::contact_step(double t_begin, double dt, double impulse_dt) {
   const ContactStep& c = contact_.last;
-  result_.contact_impulse_normal += c.normal_force * impulse_dt;
-  result_.contact_impulse_tangential += c.tangential_force * impulse_dt;
+  result_.contact.impulse_normal += c.normal_force * impulse_dt;
+  result_.contact.impulse_tangential += c.tangential_force * impulse_dt;
   if (c.active > 0) {
-    if (result_.contact_first_time < 0.0) result_.contact_first_time = t_begin;
-    result_.contact_last_time = t_begin + dt;
-    result_.contact_time += dt;
+    if (result_.contact.first_time < 0.0) result_.contact.first_time = t_begin;
+    result_.contact.last_time = t_begin + dt;
+    result_.contact.time += dt;
   }
 }
 
@@ -453,7 +453,7 @@ bool RunMonitorT<M>::observe(const State& s, double kinetic0) {
     const double vm = std::sqrt(last_peaks_.all);
     VonMises2 sampled = sampled_vm2_;  // of this step's force (or stress) pass
     for (double& x : sampled) x = std::sqrt(x);
-    max_into(result_.von_mises_sampled_max, sampled);
+    max_into(result_.stress.sampled_max, sampled);
     const double depth = penetration(model_, obstacles_of(settings_, model_), contact_, s.u);
     auto& v = result_.history.values;
     const HistoryInputs<D> row{s,  e,  c, contact_.total, error, linear_momentum(model_, s),
@@ -506,23 +506,23 @@ void RunMonitorT<M>::track_displacement(const State& s) {
 
 template <class M>
 void RunMonitorT<M>::finish(const State& s) {
-  result_.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
-  result_.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
+  result_.timing.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  result_.timing.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
   result_.steps = s.step;
   result_.end_time = s.time;
-  if (result_.wall_seconds > 0.0)
-    result_.element_steps_per_second =
-        static_cast<double>(model_.num_cells()) * static_cast<double>(s.step) / result_.wall_seconds;
+  if (result_.timing.wall_seconds > 0.0)
+    result_.timing.element_steps_per_second =
+        static_cast<double>(model_.num_cells()) * static_cast<double>(s.step) / result_.timing.wall_seconds;
   const ContactTotals& c = contact_.total;
   result_.friction_dissipation = c.friction_dissipation;
   result_.contact_work = c.contact_work;
-  result_.contact_steps = c.steps_with_contact;
-  result_.contact_sweeps_max = c.iterations_max;
-  result_.contact_unconverged_steps = c.unconverged_steps;
-  result_.contact_status_changes = c.status_changes;
-  result_.contact_status_change_steps = c.steps_with_status_changes;
+  result_.contact.steps = c.steps_with_contact;
+  result_.contact.sweeps_max = c.iterations_max;
+  result_.contact.unconverged_steps = c.unconverged_steps;
+  result_.contact.status_changes = c.status_changes;
+  result_.contact.status_change_steps = c.steps_with_status_changes;
   if (c.steps_with_contact > 0)
-    result_.contact_sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
+    result_.contact.sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
 }
 
 template class RunMonitorT<Model>;

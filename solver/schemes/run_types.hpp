@@ -145,6 +145,57 @@ struct StressPeak {
   double z = 0.0;           // 3D: its z (0 in 2D) [m]
 };
 
+// How long a run took and on how many threads (summary.json: threads, threads_min,
+// wall_seconds, cpu_seconds, element_steps_per_second).
+struct RunTiming {
+  int threads = 0;                 // threads the run may use: resolve_threads(settings.threads)
+  int threads_min = 0;             // the fewest it used (adapt_threads: others held the cores)
+  double wall_seconds = 0.0;       // time loop only
+  double cpu_seconds = 0.0;        // time loop only, process CPU time
+  double element_steps_per_second = 0.0;
+};
+
+// What contact did over the run (summary.json: contact_candidates, contact_impulse,
+// contact_iterations, ...; docs/outputs.md).
+struct RunContact {
+  int candidates = 0;              // boundary node-obstacle pairs watched
+  double sweeps_mean = 0.0;        // Gauss-Seidel sweeps per step with contact
+  int sweeps_max = 0;
+  long steps = 0;                  // steps with at least one active contact
+  long unconverged_steps = 0;      // steps that hit the sweep cap
+  long status_changes = 0;         // sum over the steps of the candidates whose status changed
+  long status_change_steps = 0;    // steps in which at least one status changed
+  double time = 0.0;               // sum of the steps with an active contact [s]
+  double impulse_normal = 0.0;     // sum over steps of normal_force * dt [N s]
+  double impulse_tangential = 0.0; // sum over steps of tangential_force * dt [N s]
+  double first_time = -1.0;        // start of the first step with an active contact [s]; -1: none
+  double last_time = -1.0;         // end of the last step with an active contact [s]; -1: none
+};
+
+// The run's von Mises peaks (summary.json: von_mises_max, von_mises_peak, ...).
+struct RunStress {
+  StressMeasure measure = StressMeasure::cauchy;
+  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
+  // von_mises_max then depends on the sampling interval).
+  bool every_step = true;
+  double von_mises_max = 0.0;       // of `measure`, over every step and cell [Pa]
+  double von_mises_max_time = 0.0;  // [s]
+  StressPeak peak;                  // of `measure` over every step, all cells
+  StressPeak interior_peak;         // the same over the cells off the contact boundary
+  VonMises2 sampled_max{0.0, 0.0, 0.0};  // per measure, over the history samples [Pa]
+};
+
+// The implicit scheme's solver counters (summary.json: newton_iterations, linear_solver, ...).
+struct RunImplicit {
+  long newton_iterations = 0;      // Newton iterations (linear solves of the free motion)
+  long linear_iterations = 0;      // CG iterations, all solves
+  bool direct_solver = false;      // CHOLMOD Cholesky (true) or PCG (false)
+  long factorizations = 0;         // direct solver: numeric factorizations of A
+};
+
+// What a run returns: its status and steps, its outcome (energy, penetration, work, drift), its
+// history and fields, and the groups above. summary.json writes every field
+// (harness/outputs/run_outputs.cpp; the keys in docs/outputs.md).
 struct RunResult {
   RunStatus status = RunStatus::ok;
   bool relaxed = false;            // the run started with a relaxation (`relaxation` is its report)
@@ -159,26 +210,12 @@ struct RunResult {
   double dt_min = 0.0, dt_max = 0.0;  // smallest and largest step taken, a last step shortened to end on end_time aside [s]
   long dt_updates = 0;             // recomputations of the step (variable step)
   double dt_floor = 0.0;           // dt_min_ratio x dt (variable step) [s]
-  double contact_time = 0.0;       // sum of the steps with an active contact [s]
   double end_time = 0.0;           // time reached [s]
   History history;
   std::vector<FieldSnapshot> fields;
   double initial_energy = 0.0;     // E_0 [J]
   double energy_error_max = 0.0;   // over samples [-]
-  double von_mises_max = 0.0;      // of stress_measure, over every step and cell [Pa]
-  double von_mises_max_time = 0.0; // [s]
-  StressMeasure stress_measure = StressMeasure::cauchy;
-  // Stress peaks at every step (true), or at the history samples only (false: cheaper, and
-  // von_mises_max then depends on the sampling interval).
-  bool stress_every_step = true;
-  StressPeak von_mises_peak;           // of stress_measure over every step, all cells
-  StressPeak von_mises_interior_peak;  // the same over the cells off the contact boundary
-  VonMises2 von_mises_sampled_max{0.0, 0.0, 0.0};  // per measure, over the history samples [Pa]
   double total_mass = 0.0;         // [kg]
-  double contact_impulse_normal = 0.0;      // sum over steps of normal_force * dt [N s]
-  double contact_impulse_tangential = 0.0;  // sum over steps of tangential_force * dt [N s]
-  double contact_first_time = -1.0;  // start of the first step with an active contact [s]; -1: none
-  double contact_last_time = -1.0;   // end of the last step with an active contact [s]; -1: none
   double penetration_max = 0.0;    // over samples [m]
   // Largest displacement of any node from the start state (the relaxed one after a
   // relaxation), |u_n - u_0|, over the monitor steps [m]: over the whole run, and over the
@@ -189,22 +226,10 @@ struct RunResult {
   double rest_until = 0.0;         // [s]
   double friction_dissipation = 0.0;  // at the end [J]
   double contact_work = 0.0;       // at the end [J]
-  int contact_candidates = 0;      // boundary node-obstacle pairs watched
-  double contact_sweeps_mean = 0.0;  // Gauss-Seidel sweeps per step with contact
-  int contact_sweeps_max = 0;
-  long contact_steps = 0;          // steps with at least one active contact
-  long contact_unconverged_steps = 0;  // steps that hit the sweep cap
-  long contact_status_changes = 0;     // sum over the steps of the candidates whose status changed
-  long contact_status_change_steps = 0;  // steps in which at least one status changed
-  long newton_iterations = 0;      // implicit scheme: Newton iterations (linear solves of the free motion)
-  long linear_iterations = 0;      // implicit scheme: CG iterations, all solves
-  bool direct_solver = false;      // implicit scheme: CHOLMOD Cholesky (true) or PCG (false)
-  long factorizations = 0;         // implicit scheme, direct solver: numeric factorizations of A
-  int threads = 0;                 // threads the run may use: resolve_threads(settings.threads)
-  int threads_min = 0;             // the fewest it used (adapt_threads: others held the cores)
-  double wall_seconds = 0.0;       // time loop only
-  double cpu_seconds = 0.0;        // time loop only, process CPU time
-  double element_steps_per_second = 0.0;
+  RunContact contact;
+  RunStress stress;
+  RunImplicit implicit;
+  RunTiming timing;
 };
 
 // Called at monitor steps so a long run can show progress; must not modify anything.
