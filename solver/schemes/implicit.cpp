@@ -69,30 +69,22 @@ inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::inte
 
 template <class M>
 ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& run, const ImplicitSettings& settings)
-    : model_(model), run_(run), obstacles_(obstacles_of(run, model)), set_(settings) {
+    : model_(model),
+      run_(run),
+      obstacles_(obstacles_of(run, model)),
+      set_(settings),
+      system_(make_system_matrix(model), model.mass, run.prescribed, settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement, run.loads);
   contact_ = make_contact_set(model, obstacles_, run.friction, run.prescribed, run.body_pairs);
   x_free_.assign(contact_.candidates.size(), {});
   weight_.assign(contact_.candidates.size(), 0.0);
-  system_ = make_system_matrix(model);
   force_roundoff_ = internal_force_roundoff(model);
   const int n = model.num_dofs();
-  pcg_.resize(n);
-  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &inv_diag_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
-                             &y_, &impulse_, &prescribed_v_})
+  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_, &y_,
+                             &impulse_, &prescribed_v_})
     v->setZero(n);
   s_.a.setZero();
   s_.forces = internal_forces(model, s_.u.data(), s_.v_half.data(), s_.f_int.data(), true);
-
-  fixed_.assign(n, 0);
-  for (const auto& p : run.prescribed) fixed_[p.dof] = 1;
-  const SparseMatrixR& A = system_.matrix;
-  for (int i = 0; i < n; ++i)
-    for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) {
-      const int j = A.innerIndexPtr()[k];
-      if (!fixed_[i] && !fixed_[j]) continue;
-      (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
-    }
   residuals_.reserve(set_.max_newton_iterations + 1);
   const int directions = contact_.any_friction ? D : 1;
   const int slots = directions * static_cast<int>(contact_.candidates.size());
@@ -104,55 +96,6 @@ ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& r
   w_.resize(slots, slots);
   engaged_.assign(contact_.candidates.size(), 0);
   r_vec_.resize(slots);
-  // "auto" is the direct solver: on the oblique plate it was faster than PCG at every step
-  // measured, 0.05 to 15 x the critical step (docs/implicit.md, The linear solver: measured).
-  if (set_.linear_solver != LinearSolverKind::pcg) use_direct();
-}
-
-// Factorizes A. If A is indefinite (the tangent of a far-off iterate under strong compression,
-// e.g. St Venant-Kirchhoff's negative geometric stiffness), shifts it by lambda M with lambda =
-// 1, 4, 16, ... until it is positive definite: the iteration matrix changes, the converged
-// solution G = 0 does not (a damped Newton iteration). The contact problem needs W positive
-// definite.
-template <class M>
-void ImplicitIntegratorT<M>::use_direct() {
-  direct_ = true;
-  factor_.analyze(system_.matrix);
-  a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
-  refactor_next_ = true;
-}
-
-template <class M>
-bool ImplicitIntegratorT<M>::factorize() {
-  const int n = model_.num_dofs();
-  double* a = a_values_.data();
-  std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
-  ++factor_id_;
-  ++factorizations_;
-  iterations_on_factor_ = 0;
-  for (int attempt = 0; attempt < 12; ++attempt) {
-    if (factor_.factorize(a)) {
-      if (attempt > 0) {
-        ++shifted_iterations_;
-        for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
-      }
-      return true;
-    }
-    const double add = attempt == 0 ? 1.0 : 3.0 * std::pow(4.0, attempt - 1);  // lambda 1, 4, 16, ...
-    for (int i = 0; i < n; ++i)
-      if (!fixed_[i]) a[system_.diagonal_slots[i]] += add * model_.mass[i];
-  }
-  failure_ = "Cholesky factorization: matrix not positive definite even when shifted by 4^11 M";
-  return false;
-}
-
-// Prescribed DOFs: identity rows and columns, so their velocity increment is zero.
-template <class M>
-void ImplicitIntegratorT<M>::constrain_matrix() {
-  double* values = system_.matrix.valuePtr();
-  for (int k : constrained_entries_) values[k] = 0.0;
-  for (int k : constrained_diagonal_) values[k] = 1.0;
-  for (int i = 0; i < model_.num_dofs(); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
 }
 
 template <class M>
@@ -162,25 +105,9 @@ double ImplicitIntegratorT<M>::load_average(const NodalLoad& l) const {
 
 template <class M>
 bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  if (direct_) {
-    factor_.solve(b, x);
-    return true;
-  }
-  const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance,
-                                 set_.max_linear_iterations);
-  linear_total_ += r.iterations;
-  if (r.converged) return true;
-  // CG met an indefinite matrix (a far-off iterate) or stalled: continue the run with the
-  // shifted Cholesky factorization, which handles both.
-  if (set_.linear_solver == LinearSolverKind::pcg) {
-    failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
-    return false;
-  }
-  use_direct();
-  if (!factorize()) return false;
-  refactor_next_ = false;
-  factor_.solve(b, x);
-  return true;
+  if (system_.solve(b, x)) return true;
+  failure_ = system_.failure();
+  return false;
 }
 
 template <class M>
@@ -261,7 +188,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
       const int node = st.node[j];
       du += st.coef[j] * (u_pred(node) - u0_.template segment<D>(D * node));
       v_rel += st.coef[j] * (v1_.template segment<D>(D * node) + dv_free_.template segment<D>(D * node));
-      const double a_jj = node_diagonal(inv_diag_, node, std::integral_constant<int, D>{});
+      const double a_jj = node_diagonal(system_.inverse_diagonal(), node, std::integral_constant<int, D>{});
       compliance += st.coef[j] * st.coef[j] / a_jj;
     }
     x_free_[k] = position ? Local{gap, frame.tangential(du)} : frame.local(v_rel);
@@ -274,7 +201,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
     contact_sweeps_ = 0;
     return true;
   }
-  contact_converged_ = direct_ ? false : uzawa_contact(c);
+  contact_converged_ = system_.direct() ? false : uzawa_contact(c);
   // As in the semi-explicit scheme, Gauss-Seidel that reaches contact.max_sweeps leaves its last
   // iterate: the step goes on and is counted in unconverged_steps. Only a failed linear solve
   // stops the run.
@@ -379,7 +306,7 @@ bool ImplicitIntegratorT<M>::uzawa_contact(double c) {
 // contact_converged_.
 template <class M>
 bool ImplicitIntegratorT<M>::column_cached(int slot, const Stencil& st, const Vec& direction) const {
-  return direct_ && column_factor_[slot] == factor_id_ && column_direction_[slot] == direction &&
+  return system_.direct() && column_factor_[slot] == system_.factor_id() && column_direction_[slot] == direction &&
          same_stencil(column_stencil_[slot], st);
 }
 
@@ -406,7 +333,7 @@ bool ImplicitIntegratorT<M>::exact_contact(double c) {
     y_.setZero();
     if (!solve(rhs_, y_)) return false;
     columns_.col(slot) = y_;
-    column_factor_[slot] = direct_ ? factor_id_ : -1;
+    column_factor_[slot] = system_.direct() ? system_.factor_id() : -1;
     column_direction_[slot] = d;
     column_stencil_[slot] = st;
   }
@@ -496,7 +423,7 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
   step_unconverged_ = false;
-  iterations_on_factor_ = 0;
+  system_.begin_step();
   double r = residual(false);
   if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
     predict(false);  // the extrapolated predictor inverted an element: start from v0 instead
@@ -556,16 +483,15 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     ++newton_total_;
     // The direct path reuses the factor of an earlier iterate (modified Newton) unless the rule
     // below asked for a new one; PCG needs the current A every iteration.
-    if (!direct_ || refactor_next_ || set_.refactor_contraction <= 0.0) {
-      assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_,
-                      f1_.data(), false);
-      constrain_matrix();
-      if (direct_) {
-        if (!factorize()) return false;
-        refactor_next_ = false;
+    if (system_.needs_matrix()) {
+      assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_.matrix(), f1_.data(),
+                      false);
+      if (!system_.prepare()) {
+        failure_ = system_.failure();
+        return false;
       }
     }
-    ++iterations_on_factor_;
+    system_.count_iteration();
     const double r_before = r;
     rhs_ = -(g_ + dt * impulse_);  // the residual without the contact reactions
     dv_free_.setZero();
@@ -587,15 +513,7 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
       if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
       alpha *= 0.5;
     }
-    // Refactorization rule (ImplicitSettings::refactor_contraction): a new factor when this
-    // iteration, not converged, contracted too little, needed a line search, or was the
-    // refactor_iterations-th of the step on this factor. A step that converges keeps the factor
-    // for the next one (counting converged steps too refactorized M2 at 1e-5 100 times instead
-    // of 35, docs/implicit.md).
-    if (direct_ && !(r <= set_.newton_tolerance) &&
-        (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 ||
-         iterations_on_factor_ >= set_.refactor_iterations))
-      refactor_next_ = true;
+    system_.end_iteration(r, r_before, alpha);  // the refactorization rule (implicit_system.hpp)
   }
   return true;
 }

@@ -15,41 +15,10 @@
 #include <vector>
 
 #include "solver/contact/contact_set.hpp"
-#include "solver/linear/cholmod_factor.hpp"
-#include "solver/linear/pcg.hpp"
+#include "solver/schemes/implicit_system.hpp"
 #include "solver/schemes/run_types.hpp"
-#include "solver/forces/tangent.hpp"
 
 namespace ricochet {
-
-enum class LinearSolverKind {
-  automatic,  // see below
-  pcg,        // Jacobi-preconditioned CG, full Newton (A assembled every iteration)
-  direct,     // CHOLMOD supernodal Cholesky (solver/linear/cholmod_factor.hpp; symbolic analysis
-              // once per run), modified Newton: the factor is reused while Newton contracts fast
-};
-// automatic: direct (faster than pcg at every step measured, docs/implicit.md). With pcg, a
-// solve that fails (indefinite matrix of a far-off iterate) switches the run to direct.
-
-struct ImplicitSettings {
-  double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
-  double xi = 0.5;                  // [0.5, 1]; 0.5 = trapezoidal force average
-  double newton_tolerance = 1e-10;  // |G|_inf <= tol * momentum scale (or dt * the internal forces' round-off)
-  int max_newton_iterations = 25;
-  double linear_tolerance = 1e-12;  // relative CG residual
-  int max_linear_iterations = 10000;
-  LinearSolverKind linear_solver = LinearSolverKind::automatic;
-  int uzawa_sweeps = 30;  // Uzawa sweeps before switching to the exact condensed W (pcg only)
-  // Refactorization rule of the direct solver's modified Newton (docs/implicit.md). The factor
-  // of A is kept across Newton iterations and steps; the next iteration refactorizes when the
-  // last one, not yet converged, contracted the residual by less than this factor
-  // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
-  // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
-  // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
-  // first of each step.
-  double refactor_contraction = 0.5;  // [0, 1)
-  int refactor_iterations = 6;        // >= 1
-};
 
 template <class M>
 class ImplicitIntegratorT {
@@ -73,11 +42,11 @@ class ImplicitIntegratorT {
   const std::vector<double>& residuals() const { return residuals_; }  // relative, last step
   const std::string& failure() const { return failure_; }
   long newton_iterations_total() const { return newton_total_; }
-  long linear_iterations_total() const { return linear_total_; }
-  bool direct_solver() const { return direct_; }
-  long factorizations() const { return factorizations_; }
+  long linear_iterations_total() const { return system_.cg_iterations(); }
+  bool direct_solver() const { return system_.direct(); }
+  long factorizations() const { return system_.factorizations(); }
   long exact_contact_solves() const { return exact_contact_solves_; }
-  long shifted_iterations() const { return shifted_iterations_; }
+  long shifted_iterations() const { return system_.shifted_factorizations(); }
 
  private:
   double residual(bool with_energy);  // G at (u1, v1) into g_, returns its relative inf-norm
@@ -86,8 +55,6 @@ class ImplicitIntegratorT {
   bool solve_contact();  // from dv_free_, fills y_ and contact_.reaction
   bool uzawa_contact(double c);        // true if it converged
   bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
-  bool factorize();
-  void use_direct();
   bool column_cached(int slot, const Stencil& st, const Vec& direction) const;
   void build_impulse();
   void add_reaction(int k);                                  // candidate k's reaction into impulse_
@@ -96,7 +63,6 @@ class ImplicitIntegratorT {
   bool newton(double r, int& sweeps);       // the iterations to the converged v1
   void close_step(double hourglass_power0, int sweeps);  // bookkeeping; u1, v1 become the state
   bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
-  void constrain_matrix();
 
   const M& model_;
   const RunSettings& run_;
@@ -104,20 +70,13 @@ class ImplicitIntegratorT {
   ImplicitSettings set_;
   State s_;
   ContactSetT<D> contact_;
+  ImplicitSystem system_;  // A, its factor or CG, the refactorization rule
   // Per candidate, the local problem x = x_free + w r of the current Newton iterate (w: the
   // diagonal estimate of the local compliance).
   std::vector<Local> x_free_;
   std::vector<double> weight_;
   int contact_sweeps_ = 0;           // sweeps of the last contact solve
   bool contact_converged_ = true;    // the last contact solve met its tolerance
-  SystemMatrix system_;
-  Pcg pcg_;
-  bool direct_ = false;
-  CholmodFactor factor_;
-  long factor_id_ = 0;         // increases with every factorization: the version of the factor
-  bool refactor_next_ = true;  // the next Newton iteration assembles and factorizes A
-  int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
-  long factorizations_ = 0;
   // A^-1 H^T e per contact candidate k and direction d (normal, then the tangents) in column
   // dirs k + d (Dn x dirs candidates). On the direct path a column is reused while the factor,
   // the candidate's stencil and its direction are those it was computed with.
@@ -129,19 +88,13 @@ class ImplicitIntegratorT {
   Eigen::MatrixXd w_;         // condensed compliance (m x m)
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
   Eigen::VectorXd r_vec_;     // dt R per active contact direction
-  std::vector<double> a_values_;  // the values of A as factorized (with the shift, if any)
-  Eigen::VectorXd inv_diag_;
-  std::vector<unsigned char> fixed_;  // per DOF: prescribed
-  std::vector<int> constrained_entries_;  // value positions of prescribed rows and columns
-  std::vector<int> constrained_diagonal_;
   Eigen::VectorXd v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, y_, impulse_, prescribed_v_;
   std::vector<double> residuals_;
   std::string failure_;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
   double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
-  long newton_total_ = 0, linear_total_ = 0;
+  long newton_total_ = 0;
   long exact_contact_solves_ = 0;
-  long shifted_iterations_ = 0;
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 

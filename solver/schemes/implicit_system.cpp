@@ -1,0 +1,102 @@
+#include "solver/schemes/implicit_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ricochet {
+
+ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
+                               const std::vector<PrescribedDof>& prescribed, const ImplicitSettings& settings)
+    : mass_(mass), set_(settings), system_(std::move(matrix)) {
+  const int n = static_cast<int>(mass.size());
+  pcg_.resize(n);
+  inv_diag_.setZero(n);
+  fixed_.assign(n, 0);
+  for (const auto& p : prescribed) fixed_[p.dof] = 1;
+  const SparseMatrixR& A = system_.matrix;
+  for (int i = 0; i < n; ++i)
+    for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) {
+      const int j = A.innerIndexPtr()[k];
+      if (!fixed_[i] && !fixed_[j]) continue;
+      (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
+    }
+  // "auto" is the direct solver: on the oblique plate it was faster than PCG at every step
+  // measured, 0.05 to 15 x the critical step (docs/implicit.md, The linear solver: measured).
+  if (set_.linear_solver != LinearSolverKind::pcg) use_direct();
+}
+
+void ImplicitSystem::use_direct() {
+  direct_ = true;
+  factor_.analyze(system_.matrix);
+  a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
+  refactor_next_ = true;
+}
+
+bool ImplicitSystem::prepare() {
+  double* values = system_.matrix.valuePtr();
+  for (int k : constrained_entries_) values[k] = 0.0;
+  for (int k : constrained_diagonal_) values[k] = 1.0;
+  for (int i = 0; i < static_cast<int>(inv_diag_.size()); ++i) inv_diag_[i] = 1.0 / values[system_.diagonal_slots[i]];
+  if (!direct_) return true;
+  if (!factorize()) return false;
+  refactor_next_ = false;
+  return true;
+}
+
+// Factorizes A. If A is indefinite (the tangent of a far-off iterate under strong compression,
+// e.g. St Venant-Kirchhoff's negative geometric stiffness), shifts it by lambda M with lambda =
+// 1, 4, 16, ... until it is positive definite: the iteration matrix changes, the converged
+// solution G = 0 does not (a damped Newton iteration). The contact problem needs W positive
+// definite.
+bool ImplicitSystem::factorize() {
+  const int n = static_cast<int>(inv_diag_.size());
+  double* a = a_values_.data();
+  std::copy(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros(), a);
+  ++factor_id_;
+  ++factorizations_;
+  iterations_on_factor_ = 0;
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    if (factor_.factorize(a)) {
+      if (attempt > 0) {
+        ++shifted_;
+        for (int i = 0; i < n; ++i) inv_diag_[i] = 1.0 / a[system_.diagonal_slots[i]];
+      }
+      return true;
+    }
+    const double add = attempt == 0 ? 1.0 : 3.0 * std::pow(4.0, attempt - 1);  // lambda 1, 4, 16, ...
+    for (int i = 0; i < n; ++i)
+      if (!fixed_[i]) a[system_.diagonal_slots[i]] += add * mass_[i];
+  }
+  failure_ = "Cholesky factorization: matrix not positive definite even when shifted by 4^11 M";
+  return false;
+}
+
+bool ImplicitSystem::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (direct_) {
+    factor_.solve(b, x);
+    return true;
+  }
+  const PcgResult r = pcg_.solve(system_.matrix, inv_diag_, b, x, set_.linear_tolerance, set_.max_linear_iterations);
+  cg_iterations_ += r.iterations;
+  if (r.converged) return true;
+  // CG met an indefinite matrix (a far-off iterate) or stalled: continue the run with the
+  // shifted Cholesky factorization, which handles both.
+  if (set_.linear_solver == LinearSolverKind::pcg) {
+    failure_ = "linear solve did not converge (relative residual " + std::to_string(r.relative_residual) + ")";
+    return false;
+  }
+  use_direct();
+  if (!factorize()) return false;
+  refactor_next_ = false;
+  factor_.solve(b, x);
+  return true;
+}
+
+void ImplicitSystem::end_iteration(double r, double r_before, double alpha) {
+  // Counting converged steps too refactorized M2 at 1e-5 100 times instead of 35 (docs/implicit.md).
+  if (direct_ && !(r <= set_.newton_tolerance) &&
+      (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 || iterations_on_factor_ >= set_.refactor_iterations))
+    refactor_next_ = true;
+}
+
+}  // namespace ricochet

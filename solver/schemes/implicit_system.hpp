@@ -1,0 +1,111 @@
+// The implicit scheme's linear system (docs/implicit.md, The linear solver): the iteration matrix
+// A = M + theta xi dt^2 K_T + xi dt C in its preallocated pattern (forces/tangent.hpp), its
+// prescribed rows and columns, and how A x = b is solved:
+//   - direct: CHOLMOD's Cholesky factor (solver/linear/cholmod_factor.hpp), shifted by lambda M
+//     when A is indefinite, and kept over Newton iterations and steps (modified Newton) until the
+//     refactorization rule asks for a new one (ImplicitSettings::refactor_contraction);
+//   - pcg: Jacobi-preconditioned CG with A assembled every iteration (full Newton), and the
+//     direct path as the fallback of a solve that fails (unless pcg was asked for by name).
+// A Newton iteration calls needs_matrix(); if true, it assembles into matrix() and calls
+// prepare(); then count_iteration(), solves, and after its update end_iteration().
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "solver/core/loads.hpp"
+#include "solver/forces/tangent.hpp"
+#include "solver/linear/cholmod_factor.hpp"
+#include "solver/linear/pcg.hpp"
+
+namespace ricochet {
+
+enum class LinearSolverKind {
+  automatic,  // see below
+  pcg,        // Jacobi-preconditioned CG, full Newton (A assembled every iteration)
+  direct,     // CHOLMOD supernodal Cholesky (solver/linear/cholmod_factor.hpp; symbolic analysis
+              // once per run), modified Newton: the factor is reused while Newton contracts fast
+};
+// automatic: direct (faster than pcg at every step measured, docs/implicit.md). With pcg, a
+// solve that fails (indefinite matrix of a far-off iterate) switches the run to direct.
+
+struct ImplicitSettings {
+  double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
+  double xi = 0.5;                  // [0.5, 1]; 0.5 = trapezoidal force average
+  double newton_tolerance = 1e-10;  // |G|_inf <= tol * momentum scale (or dt * the internal forces' round-off)
+  int max_newton_iterations = 25;
+  double linear_tolerance = 1e-12;  // relative CG residual
+  int max_linear_iterations = 10000;
+  LinearSolverKind linear_solver = LinearSolverKind::automatic;
+  int uzawa_sweeps = 30;  // Uzawa sweeps before switching to the exact condensed W (pcg only)
+  // Refactorization rule of the direct solver's modified Newton (docs/implicit.md). The factor
+  // of A is kept across Newton iterations and steps; the next iteration refactorizes when the
+  // last one, not yet converged, contracted the residual by less than this factor
+  // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
+  // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
+  // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
+  // first of each step.
+  double refactor_contraction = 0.5;  // [0, 1)
+  int refactor_iterations = 6;        // >= 1
+};
+
+class ImplicitSystem {
+ public:
+  // `mass`: the lumped masses per DOF (the shift's lambda M), kept by reference.
+  ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass, const std::vector<PrescribedDof>& prescribed,
+                 const ImplicitSettings& settings);
+
+  // The matrix to assemble A into (values only: the pattern is fixed).
+  SystemMatrix& matrix() { return system_; }
+  // True when this Newton iteration must assemble A: always with CG, with the factor when the
+  // rule asked for a new one (or refactor_contraction = 0: full Newton).
+  bool needs_matrix() const { return !direct_ || refactor_next_ || set_.refactor_contraction <= 0.0; }
+  // After an assembly: prescribed rows and columns become the identity's (their increment is
+  // zero), the Jacobi diagonal is taken, and on the direct path A is factorized. False (failure()
+  // says why) when A is not positive definite even shifted.
+  bool prepare();
+  // x = A^-1 b, by the factor or by CG from x. False (failure()) when CG fails and pcg was asked
+  // for by name, or the fallback's factorization fails.
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  // The bookkeeping of the refactorization rule: a step starts with no iteration on the factor,
+  void begin_step() { iterations_on_factor_ = 0; }
+  // each Newton iteration counts one,
+  void count_iteration() { ++iterations_on_factor_; }
+  // and an iteration that left the residual r (from r_before; line-search factor alpha) above the
+  // tolerance asks for a new factor when it contracted too little, needed a line search, or was
+  // the refactor_iterations-th on this factor. A step that converges keeps the factor.
+  void end_iteration(double r, double r_before, double alpha);
+
+  bool direct() const { return direct_; }
+  long factor_id() const { return factor_id_; }  // increases with every factorization
+  const Eigen::VectorXd& inverse_diagonal() const { return inv_diag_; }  // 1 / diag(A) as solved
+  long factorizations() const { return factorizations_; }
+  long shifted_factorizations() const { return shifted_; }  // factorizations that needed a shift
+  long cg_iterations() const { return cg_iterations_; }
+  const std::string& failure() const { return failure_; }
+
+ private:
+  void use_direct();
+  bool factorize();
+
+  const Eigen::VectorXd& mass_;
+  ImplicitSettings set_;
+  SystemMatrix system_;
+  Pcg pcg_;
+  bool direct_ = false;
+  CholmodFactor factor_;
+  long factor_id_ = 0;
+  bool refactor_next_ = true;     // the next Newton iteration assembles and factorizes A
+  int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
+  long factorizations_ = 0;
+  long shifted_ = 0;
+  long cg_iterations_ = 0;
+  std::vector<double> a_values_;  // the values of A as factorized (with the shift, if any)
+  Eigen::VectorXd inv_diag_;
+  std::vector<unsigned char> fixed_;       // per DOF: prescribed
+  std::vector<int> constrained_entries_;   // value positions of prescribed rows and columns
+  std::vector<int> constrained_diagonal_;
+  std::string failure_;
+};
+
+}  // namespace ricochet
