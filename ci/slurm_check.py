@@ -14,6 +14,11 @@
         this answer and the kill that follows it.
     slurm_check.py pid DIR K N
         The pid in DIR/shards/K-of-N/shard.json (the shard process).
+    slurm_check.py settled DIR K N
+        Exit 1 while shard K of N's process is alive or one of its runs holds its run.lock;
+        then prints the runs it started and did not finish (overrides.json, but neither
+        summary.json nor failure.json): the run a stopped shard interrupted, or none if it was
+        stopped between two runs.
     slurm_check.py interrupted DIR RUN_ID
         Exit 0 if the run folder is free (nobody holds its run.lock) and holds no summary.json:
         the run was stopped before it finished and nothing writes its folder any more.
@@ -143,6 +148,31 @@ def running(out, k, n):
     return 0
 
 
+def settled(out, k, n):
+    m = manifest(out, k, n)
+    if not m:
+        return 1
+    try:
+        os.kill(int(m["pid"]), 0)
+        return 1  # the shard process is still alive
+    except ProcessLookupError:
+        pass
+    except PermissionError:
+        return 1
+    unfinished = []
+    for i in m.get("runs", []):
+        folder = os.path.join(out, "runs", i)
+        if held(os.path.join(folder, "run.lock")):
+            return 1
+        started = os.path.exists(os.path.join(folder, "overrides.json"))
+        ended = any(os.path.exists(os.path.join(folder, f)) for f in ("summary.json", "failure.json"))
+        if started and not ended:
+            unfinished.append(i)
+    for i in unfinished:
+        print(i)
+    return 0
+
+
 def finished_runs(out):
     found = {}
     for root, _dirs, files in os.walk(os.path.join(out, "runs")):
@@ -171,6 +201,8 @@ def main(argv):
             return 1
         print(m["pid"])
         return 0
+    if cmd == "settled" and len(args) == 3:
+        return settled(args[0], int(args[1]), int(args[2]))
     if cmd == "interrupted" and len(args) == 2:
         folder = os.path.join(args[0], "runs", args[1])
         return 1 if held(os.path.join(folder, "run.lock")) or os.path.exists(os.path.join(folder, "summary.json")) else 0
