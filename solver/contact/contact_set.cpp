@@ -115,24 +115,10 @@ template <class M>
 double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                    const std::vector<typename Space<M::kDim>::Surface>& surfaces,
                    const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
-  constexpr int D = M::kDim;
-  using Vec = VecD<D>;
   double depth = 0.0;
-  auto position = [&](int j) -> Vec { return model.ref.col(j) + u.segment<D>(D * j); };
-  int boxed = -1;  // a pair's candidates are contiguous: one bounding box per pair
-  typename Space<D>::Box box;
-  for (const ContactCandidate& cc : candidates) {
-    const Vec x = position(cc.node);
-    if (cc.pair < 0) {
-      depth = std::max(depth, -closest(obstacles[cc.obstacle], x).gap);
-      continue;
-    }
-    if (cc.pair != boxed) {
-      box = surface_box(surfaces.at(cc.pair), position, 0.0);
-      boxed = cc.pair;
-    }
-    if (box.contains(x)) depth = std::max(depth, depth_inside(model, surfaces[cc.pair], u, x));
-  }
+  for_each_candidate_depth(
+      model, obstacles, surfaces, candidates, u, [](std::size_t) { return false; },
+      [&](std::size_t, double d) { depth = std::max(depth, d); });
   return depth;
 }
 

@@ -367,8 +367,39 @@ void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obsta
                          const ContactSetT<M::kDim>& c, const Eigen::VectorXd& u, double* force, double* gap,
                          int* status);
 
+// Calls fn(k, depth) for every candidate k that skip(k) leaves in, with its depth at u (>= 0) [m]:
+// behind its obstacle (minus closest()'s gap, when negative), or inside its pair's master body
+// (depth_inside). A node outside the bounding box of the master surface's nodes is outside the
+// body: only nodes inside it are measured against every segment (face). A pair's candidates are
+// contiguous, so the box is taken once per pair. Allocates nothing.
+template <class M, class Skip, class Fn>
+void for_each_candidate_depth(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                              const std::vector<typename Space<M::kDim>::Surface>& surfaces,
+                              const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u,
+                              const Skip& skip, const Fn& fn) {
+  constexpr int D = M::kDim;
+  using Vec = VecD<D>;
+  auto position = [&](int j) -> Vec { return model.ref.col(j) + u.template segment<D>(D * j); };
+  int boxed = -1;
+  typename Space<D>::Box box;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    if (skip(k)) continue;
+    const ContactCandidate& cc = candidates[k];
+    const Vec x = position(cc.node);
+    if (cc.pair < 0) {
+      fn(k, std::max(0.0, -closest(obstacles[cc.obstacle], x).gap));
+      continue;
+    }
+    if (cc.pair != boxed) {
+      box = surface_box(surfaces.at(cc.pair), position, 0.0);
+      boxed = cc.pair;
+    }
+    fn(k, box.contains(x) ? depth_inside(model, surfaces[cc.pair], u, x) : 0.0);
+  }
+}
+
 // Largest depth of any candidate node behind its obstacle, or inside its pair's master body
-// (depth_inside), at u (>= 0) [m]. Every scheme measures penetration with this.
+// (for_each_candidate_depth), at u (>= 0) [m]. Every scheme measures penetration with this.
 template <class M>
 double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                    const std::vector<typename Space<M::kDim>::Surface>& surfaces,

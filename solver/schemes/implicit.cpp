@@ -215,26 +215,14 @@ bool ImplicitIntegratorT<M>::solve_contact() {
 template <class M>
 bool ImplicitIntegratorT<M>::engage_penetrating() {
   bool any = false;
-  auto position = [&](int j) -> Vec { return model_.ref.col(j) + u1_.template segment<D>(D * j); };
-  // A node outside the bounding box of a master surface's nodes is outside that body: only nodes
-  // inside it take the distance to every face. A pair's candidates are contiguous: one box per pair.
-  int boxed = -1;
-  typename Space<D>::Box box;
-  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
-    if (engaged_[k]) continue;
-    const ContactCandidate& cc = contact_.candidates[k];
-    const Vec x = position(cc.node);
-    if (cc.pair >= 0 && cc.pair != boxed) {
-      box = surface_box(contact_.surfaces[cc.pair], position, 0.0);
-      boxed = cc.pair;
-    }
-    const bool inside = cc.pair < 0 ? closest(obstacles_[cc.obstacle], x).gap < 0.0
-                                    : box.contains(x) && depth_inside(model_, contact_.surfaces[cc.pair], u1_, x) > 0.0;
-    if (inside) {
-      engaged_[k] = 1;
-      any = true;
-    }
-  }
+  for_each_candidate_depth(
+      model_, obstacles_, contact_.surfaces, contact_.candidates, u1_, [&](std::size_t k) { return engaged_[k] != 0; },
+      [&](std::size_t k, double depth) {
+        if (depth > 0.0) {
+          engaged_[k] = 1;
+          any = true;
+        }
+      });
   return any;
 }
 
