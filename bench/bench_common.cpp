@@ -12,7 +12,7 @@ namespace {
 
 std::atomic<int> failures{0};
 
-Model build_plate_model(ElementKind element, MaterialKind material, int nx) {
+Model<2> build_plate_model(ElementKind element, MaterialKind material, int nx) {
   constexpr double young = 200e9, poisson = 0.3, density = 7800.0;
   constexpr PlaneMode plane = PlaneMode::stress;
 
@@ -21,7 +21,7 @@ Model build_plate_model(ElementKind element, MaterialKind material, int nx) {
   spec.nx = spec.ny = nx;
   spec.triangles = element == ElementKind::t3;
 
-  BodyInput body;
+  BodyInput<2> body;
   body.name = "plate";
   body.mesh = make_rectangle(spec);
   if (material == MaterialKind::st_venant_kirchhoff)
@@ -56,12 +56,12 @@ std::string_view material_name(MaterialKind kind) {
   return "unknown";
 }
 
-const Model& plate_model(ElementKind element, MaterialKind material, int nx) {
+const Model<2>& plate_model(ElementKind element, MaterialKind material, int nx) {
   struct Cached {
     ElementKind element;
     MaterialKind material;
     int nx = 0;
-    Model model;
+    Model<2> model;
   };
   static std::optional<Cached> cache;
   if (!cache || cache->element != element || cache->material != material || cache->nx != nx) {
@@ -71,7 +71,7 @@ const Model& plate_model(ElementKind element, MaterialKind material, int nx) {
   return cache->model;
 }
 
-Eigen::VectorXd plate_field(const Model& model, int nx, double amplitude) {
+Eigen::VectorXd plate_field(const Model<2>& model, int nx, double amplitude) {
   const double k = std::numbers::pi / plate_side;
   Eigen::VectorXd a(model.num_dofs());
   for (int n = 0; n < model.num_nodes(); ++n) {

@@ -24,12 +24,12 @@ inline constexpr double plate_side = 0.1;
 
 // The plate model with nx x nx cells (2 nx^2 triangles for ElementKind::t3). The last model
 // built is cached, since the library calls a benchmark function several times per run.
-const Model& plate_model(ElementKind element, MaterialKind material, int nx);
+const Model<2>& plate_model(ElementKind element, MaterialKind material, int nx);
 
 // Per DOF (2n, interleaved): amplitude * (smooth mode of wavelength 2 * plate_side +
 // 1e-3 * checkerboard hourglass mode), for the plate of nx x nx cells. Unit of `amplitude`
 // is the unit of the field ([m] for displacement, [m/s] for velocity).
-Eigen::VectorXd plate_field(const Model& model, int nx, double amplitude);
+Eigen::VectorXd plate_field(const Model<2>& model, int nx, double amplitude);
 
 // Marks the benchmark as failed (reported as an error) and makes ricochet_bench exit non-zero.
 void fail(benchmark::State& state, const std::string& message);

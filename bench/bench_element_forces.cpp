@@ -23,7 +23,7 @@ constexpr int plate_cells = 100;  // cells per side
 enum class StressMode { off, all, bound };
 
 void element_forces(benchmark::State& state, ElementKind element, MaterialKind material, StressMode mode) {
-  const Model& model = plate_model(element, material, plate_cells);
+  const Model<2>& model = plate_model(element, material, plate_cells);
   const Eigen::VectorXd u = plate_field(model, plate_cells, 1e-5);  // [m], strain ~3e-4
   const Eigen::VectorXd v = plate_field(model, plate_cells, 1.0);   // [m/s]
   Eigen::VectorXd f(model.num_dofs());

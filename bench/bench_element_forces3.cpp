@@ -21,7 +21,7 @@
 #include "bench/bench_common.hpp"
 #include "bench/explicit_steps.hpp"
 #include "harness/input/mesh_generators3.hpp"
-#include "solver/forces/internal_forces3.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/threads.hpp"
 
@@ -44,12 +44,12 @@ constexpr double cube_side = 0.1;  // [m]
 
 // Steel-like (E = 200 GPa, nu = 0.3, rho = 7800 kg/m^3), hourglass coefficient 0.1. The last
 // model built is cached (the library calls a benchmark function several times).
-const Model3& cube_model(Element3 element, MaterialKind material, int n) {
+const Model<3>& cube_model(Element3 element, MaterialKind material, int n) {
   struct Cached {
     Element3 element;
     MaterialKind material;
     int n = 0;
-    Model3 model;
+    Model<3> model;
   };
   static std::optional<Cached> cache;
   if (cache && cache->element == element && cache->material == material && cache->n == n) return cache->model;
@@ -58,7 +58,7 @@ const Model3& cube_model(Element3 element, MaterialKind material, int n) {
   spec.size = Vec3::Constant(cube_side);
   spec.nx = spec.ny = spec.nz = n;
   spec.tetrahedra = element == Element3::tet4;
-  BodyInput3 body;
+  BodyInput<3> body;
   body.name = "cube";
   body.mesh = make_box(spec);
   if (material == MaterialKind::st_venant_kirchhoff)
@@ -68,12 +68,12 @@ const Model3& cube_model(Element3 element, MaterialKind material, int n) {
   body.hex_element = element == Element3::hex8_2x2x2 ? HexElement::full_2x2x2 : HexElement::one_point_hourglass;
   body.hourglass.form =
       element == Element3::hex8_one_point_stiffness ? HourglassForm::stiffness : HourglassForm::viscous;
-  cache = Cached{element, material, n, build_model3({body}, Vec3::Zero())};
+  cache = Cached{element, material, n, build_model({body}, Vec3::Zero())};
   return cache->model;
 }
 
 // Per DOF (3n): amplitude * (a smooth mode of wavelength 2 cube_side + 1e-3 * a checkerboard).
-Eigen::VectorXd cube_field(const Model3& model, int n, double amplitude) {
+Eigen::VectorXd cube_field(const Model<3>& model, int n, double amplitude) {
   const double k = std::numbers::pi / cube_side;
   Eigen::VectorXd a(model.num_dofs());
   for (int p = 0; p < model.num_nodes(); ++p) {
@@ -90,7 +90,7 @@ Eigen::VectorXd cube_field(const Model3& model, int n, double amplitude) {
 enum class StressMode { off, all, bound };
 
 void element_forces3(benchmark::State& state, Element3 element, MaterialKind material, int n, StressMode mode) {
-  const Model3& model = cube_model(element, material, n);
+  const Model<3>& model = cube_model(element, material, n);
   const Eigen::VectorXd u = cube_field(model, n, 1e-5);  // [m], strain ~3e-4
   const Eigen::VectorXd v = cube_field(model, n, 1.0);   // [m/s]
   Eigen::VectorXd f(model.num_dofs());
@@ -126,7 +126,7 @@ void element_forces3(benchmark::State& state, Element3 element, MaterialKind mat
 // time): the 3D rows of the scaling table of docs/performance.md.
 void explicit_step3(benchmark::State& state, Element3 element, int n, int threads) {
   const ThreadScope scope(threads);
-  const Model3& model = cube_model(element, MaterialKind::st_venant_kirchhoff, n);
+  const Model<3>& model = cube_model(element, MaterialKind::st_venant_kirchhoff, n);
   const std::vector<PrescribedDof> prescribed;
   State s = initial_state(model, prescribed, 0.5 * model.critical_dt, cube_field(model, n, 1e-5));
   s.v_half = cube_field(model, n, 1.0);

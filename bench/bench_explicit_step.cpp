@@ -18,7 +18,7 @@ namespace {
 
 void explicit_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx, int threads) {
   const ThreadScope scope(threads);
-  const Model& model = plate_model(element, material, nx);
+  const Model<2>& model = plate_model(element, material, nx);
   const std::vector<PrescribedDof> prescribed;
   const double dt = 0.5 * model.critical_dt;  // [s]
   const double cells = model.num_cells();

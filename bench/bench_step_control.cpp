@@ -18,7 +18,7 @@ namespace {
 
 void critical_step(benchmark::State& state, ElementKind element, MaterialKind material, int nx, int threads) {
   const ThreadScope scope(threads);
-  const Model& model = plate_model(element, material, nx);
+  const Model<2>& model = plate_model(element, material, nx);
   RunSettings settings;
   settings.dt = 0.5 * model.critical_dt;
   settings.end_time = 1.0;

@@ -22,7 +22,7 @@ namespace {
 
 constexpr int arc_nx = 36, arc_ny = 91;
 
-Model arc_plate_model(MaterialKind material) {
+Model<2> arc_plate_model(MaterialKind material) {
   constexpr double young = 1.0e7, poisson = 0.25, density = 1000.0;
   constexpr PlaneMode plane = PlaneMode::stress;
   ArcPlateSpec spec;
@@ -31,7 +31,7 @@ Model arc_plate_model(MaterialKind material) {
   spec.radius = 0.101;
   spec.nx = arc_nx;
   spec.ny = arc_ny;
-  BodyInput body;
+  BodyInput<2> body;
   body.name = "plate";
   body.mesh = make_arc_plate(spec);
   if (material == MaterialKind::st_venant_kirchhoff)
@@ -44,7 +44,7 @@ Model arc_plate_model(MaterialKind material) {
 }
 
 // amplitude * (smooth mode of wavelength 0.08 m + 1e-3 * checkerboard), per DOF.
-Eigen::VectorXd arc_field(const Model& model, double amplitude) {
+Eigen::VectorXd arc_field(const Model<2>& model, double amplitude) {
   const double k = std::numbers::pi / 0.04;
   Eigen::VectorXd a(model.num_dofs());
   for (int n = 0; n < model.num_nodes(); ++n) {
@@ -58,7 +58,7 @@ Eigen::VectorXd arc_field(const Model& model, double amplitude) {
 }
 
 void tangent_assembly(benchmark::State& state, MaterialKind material) {
-  const Model model = arc_plate_model(material);
+  const Model<2> model = arc_plate_model(material);
   const Eigen::VectorXd u = arc_field(model, 1e-4);  // [m], strain ~ 1e-4 * pi / 0.04 ~ 1 %
   const Eigen::VectorXd v = arc_field(model, 1.0);   // [m/s]
   SystemMatrix s = make_system_matrix(model);
@@ -87,7 +87,7 @@ void tangent_assembly(benchmark::State& state, MaterialKind material) {
 
 // The force evaluation alone on the same model and fields (the explicit scheme's kernel).
 void forces_only(benchmark::State& state, MaterialKind material) {
-  const Model model = arc_plate_model(material);
+  const Model<2> model = arc_plate_model(material);
   const Eigen::VectorXd u = arc_field(model, 1e-4);
   const Eigen::VectorXd v = arc_field(model, 1.0);
   Eigen::VectorXd f(model.num_dofs());

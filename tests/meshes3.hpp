@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "harness/input/mesh_generators3.hpp"
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet::test3 {
 
@@ -47,8 +47,8 @@ inline const char* kind_name(Kind k) {
 }
 inline bool is_tet(Kind k) { return k == Kind::tet4; }
 
-inline BodyInput3 body_of(Kind kind, Mesh3 mesh, const Material3& material, const std::string& name = "box") {
-  BodyInput3 b;
+inline BodyInput<3> body_of(Kind kind, Mesh3 mesh, const Material3& material, const std::string& name = "box") {
+  BodyInput<3> b;
   b.name = name;
   b.mesh = std::move(mesh);
   b.material = material;
@@ -84,7 +84,7 @@ inline Mesh3 distorted_box(int nx, int ny, int nz, bool tets, double jitter, uns
 }
 
 // A smooth field of gradient ~ amplitude on the model's nodes (3n, interleaved).
-inline Eigen::VectorXd smooth_field(const Model3& model, double amplitude) {
+inline Eigen::VectorXd smooth_field(const Model<3>& model, double amplitude) {
   Eigen::VectorXd a(model.num_dofs());
   for (int i = 0; i < model.num_nodes(); ++i) {
     const double x = model.ref(0, i), y = model.ref(1, i), z = model.ref(2, i);

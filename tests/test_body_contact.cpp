@@ -23,7 +23,7 @@
 namespace ricochet {
 namespace {
 
-BodyInput bar(const std::string& name, double width, double height, int nx, int ny, Vec2 origin, Vec2 velocity,
+BodyInput<2> bar(const std::string& name, double width, double height, int nx, int ny, Vec2 origin, Vec2 velocity,
               double young = 2.0e11, double density = 8000.0) {
   RectangleSpec r;
   r.width = width;
@@ -31,7 +31,7 @@ BodyInput bar(const std::string& name, double width, double height, int nx, int 
   r.nx = nx;
   r.ny = ny;
   r.origin = origin;
-  BodyInput b;
+  BodyInput<2> b;
   b.name = name;
   b.mesh = make_rectangle(r);
   b.material = StVenantKirchhoff::make(young, 0.0, density, PlaneMode::stress);
@@ -52,7 +52,7 @@ const char* name(Scheme s) {
   return s == Scheme::semi_explicit ? "semi_explicit" : s == Scheme::penalty ? "explicit_penalty" : "implicit";
 }
 
-RunResult run(const Model& model, RunSettings s, Scheme scheme) {
+RunResult run(const Model<2>& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
     const PenaltyContact p = make_penalty_contact(model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
@@ -63,7 +63,7 @@ RunResult run(const Model& model, RunSettings s, Scheme scheme) {
 }
 
 TEST(BodyContact, SurfaceIsTheOrientedBoundary) {
-  const Model model = build_model({bar("b", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
+  const Model<2> model = build_model({bar("b", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
   const Surface s = make_surface(model, 0);
   ASSERT_EQ(s.segments.size(), 6u);
   EXPECT_DOUBLE_EQ(s.max_length, 1.0);
@@ -83,7 +83,7 @@ TEST(BodyContact, SurfaceIsTheOrientedBoundary) {
 
 TEST(BodyContact, SegmentChoice) {
   // Master: the unit square [0, 2] x [0, 1] of 2 cells. Slave points are given directly.
-  const Model model = build_model({bar("m", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
+  const Model<2> model = build_model({bar("m", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
   const Surface s = make_surface(model, 0);
   std::vector<Vec2, Eigen::aligned_allocator<Vec2>> x(model.num_nodes() + 1), v(model.num_nodes() + 1);
   for (int j = 0; j < model.num_nodes(); ++j) x[j] = model.ref.col(j), v[j] = Vec2::Zero();
@@ -135,7 +135,7 @@ TEST(BodyContact, VertexContact) {
   // Convex: the 2 x 1 master of SegmentChoice, a node that starts outside the top-right corner
   // and is predicted inside it.
   {
-    const Model model = build_model({bar("m", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
+    const Model<2> model = build_model({bar("m", 2.0, 1.0, 2, 1, Vec2::Zero(), Vec2::Zero())}, PlaneMode::stress, Vec2::Zero());
     const Surface s = make_surface(model, 0);
     const int p = model.num_nodes();
     std::vector<Vec2, Eigen::aligned_allocator<Vec2>> x0(p + 1), x1(p + 1), v(p + 1, Vec2::Zero());
@@ -167,14 +167,14 @@ TEST(BodyContact, VertexContact) {
   // Concave: an L of three unit cells (the top-right one missing). The corner (1, 1) is
   // concave; a node at (0.9, 0.9) is inside the body in that corner's wedge.
   {
-    BodyInput b;
+    BodyInput<2> b;
     b.name = "L";
     b.mesh.nodes.resize(2, 8);
     b.mesh.nodes << 0, 1, 2, 0, 1, 2, 0, 1,  //
                     0, 0, 0, 1, 1, 1, 2, 2;
     b.mesh.quads = {{0, 1, 4, 3}, {1, 2, 5, 4}, {3, 4, 7, 6}};
     b.material = StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress);
-    const Model model = build_model({b}, PlaneMode::stress, Vec2::Zero());
+    const Model<2> model = build_model({b}, PlaneMode::stress, Vec2::Zero());
     const Surface s = make_surface(model, 0);
     ASSERT_EQ(s.segments.size(), 8u);
     const int p = model.num_nodes();
@@ -202,7 +202,7 @@ TEST(BodyContact, VertexContact) {
 // Two identical bars end to end (docs/background.md, Independent benchmarks, B2b): a striker at v0
 // hits a bar at rest, mu = 0.
 struct HeadOn {
-  Model model;
+  Model<2> model;
   RunSettings settings;
   double mass = 0.0, v0 = 1.0;
   explicit HeadOn(double mu = 0.0, Vec2 velocity = {1.0, 0.0}) {
@@ -247,7 +247,7 @@ TEST(BodyContact, ObliqueFrictionalImpactConservesMomentum) {
   // A block falls obliquely onto a free block (no gravity), mu = 0.3: the friction forces are
   // internal too, both momentum components stay, and sliding dissipates energy.
   for (Scheme scheme : {Scheme::semi_explicit, Scheme::penalty, Scheme::implicit}) {
-    Model model = build_model({bar("top", 0.04, 0.02, 4, 2, {0.01, 0.02}, {2.0, -1.0}, 1e8, 1000.0),
+    Model<2> model = build_model({bar("top", 0.04, 0.02, 4, 2, {0.01, 0.02}, {2.0, -1.0}, 1e8, 1000.0),
                                bar("bottom", 0.1, 0.02, 10, 2, {0.0, 0.0}, Vec2::Zero(), 1e8, 1000.0)},
                               PlaneMode::stress, Vec2::Zero());
     RunSettings s;
@@ -274,7 +274,7 @@ TEST(BodyContact, BlockSlidingOnADeformableFloorDeceleratesAtMuG) {
   // deceleration mu g while it slides across the floor's 1 cm segments (about 14 of them in
   // 0.15 s), node by node from segment to segment.
   const double mu = 0.3, g = 9.81;
-  Model model = build_model({bar("block", 0.1, 0.05, 10, 5, {0.0, 0.02}, {1.0, 0.0}, 1e9, 1000.0),
+  Model<2> model = build_model({bar("block", 0.1, 0.05, 10, 5, {0.0, 0.02}, {1.0, 0.0}, 1e9, 1000.0),
                              bar("floor", 0.6, 0.02, 60, 2, {-0.05, 0.0}, Vec2::Zero(), 1e9, 1000.0)},
                             PlaneMode::stress, Vec2(0.0, -g));
   RunSettings s;

@@ -24,12 +24,12 @@ namespace {
 
 using Points = std::vector<Vec3>;
 
-Model3 model_of(Mesh3 mesh) {
-  BodyInput3 b;
+Model<3> model_of(Mesh3 mesh) {
+  BodyInput<3> b;
   b.name = "master";
   b.mesh = std::move(mesh);
   b.material = StVenantKirchhoff3::make(1e6, 0.3, 1000.0);
-  return build_model3({b}, Vec3::Zero());
+  return build_model({b}, Vec3::Zero());
 }
 
 Mesh3 box_mesh(Vec3 size, int nx, int ny, int nz, bool tets, Vec3 origin = Vec3::Zero()) {
@@ -72,7 +72,7 @@ Mesh3 cubes(const std::vector<std::array<int, 3>>& cells, bool tets = false) {
 }
 
 // The model's reference positions with one more point at the end: the slave node.
-Points positions_with_slave(const Model3& model) {
+Points positions_with_slave(const Model<3>& model) {
   Points x(model.num_nodes() + 1);
   for (int j = 0; j < model.num_nodes(); ++j) x[j] = model.ref.col(j);
   return x;
@@ -112,7 +112,7 @@ std::vector<Mesh3> test_meshes() {
 TEST(BodyContact3, SurfaceIsClosedAndOutward) {
   for (Mesh3& mesh : test_meshes()) {
     const bool tets = !mesh.tets.empty();
-    const Model3 model = model_of(mesh);
+    const Model<3> model = model_of(mesh);
     const Surface3 s = make_surface3(model, 0);
     const Points x = positions_with_slave(model);
     ASSERT_EQ(s.faces.size(), model.bodies[0].boundary_faces.size());
@@ -305,7 +305,7 @@ TEST(BodyContact3, FaceStencilSumsToZeroAndGivesTheClosestPoint) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.05, 0.95), h(-0.005, 0.005);
   for (Mesh3& mesh : test_meshes()) {
-    const Model3 model = model_of(mesh);
+    const Model<3> model = model_of(mesh);
     const Surface3 s = make_surface3(model, 0);
     Points x = positions_with_slave(model);
     const Points v(x.size(), Vec3::Zero());
@@ -344,7 +344,7 @@ TEST(BodyContact3, FaceStencilSumsToZeroAndGivesTheClosestPoint) {
 // x = 1, z = 1 diagonally, then over the convex edge at x = 3 and down the side.
 TEST(BodyContact3, WalkingAcrossFacesEdgesAndVertices) {
   for (const bool tets : {false, true}) {
-    const Model3 model = model_of(box_mesh(Vec3(3.0, 1.0, 2.0), 3, 2, 2, tets));
+    const Model<3> model = model_of(box_mesh(Vec3(3.0, 1.0, 2.0), 3, 2, 2, tets));
     const Surface3 s = make_surface3(model, 0);
     Points x0 = positions_with_slave(model);
     Points x1 = x0;
@@ -440,7 +440,7 @@ TEST(BodyContact3, WalkingAcrossFacesEdgesAndVertices) {
 
 TEST(BodyContact3, EdgeAndVertexContactFromTheStartOfTheStep) {
   for (const bool tets : {false, true}) {
-    const Model3 model = model_of(box_mesh(Vec3(1.0, 1.0, 1.0), 2, 2, 2, tets));
+    const Model<3> model = model_of(box_mesh(Vec3(1.0, 1.0, 1.0), 2, 2, 2, tets));
     const Surface3 s = make_surface3(model, 0);
     Points x0 = positions_with_slave(model);
     Points x1 = x0;
@@ -493,7 +493,7 @@ TEST(BodyContact3, ConcaveEdgeInsideUsesTheBisector) {
   // An L: cubes (0,0,0), (1,0,0), (0,1,0). The edge x = y = 1 (z in [0, 1]) is concave: a node
   // pressed in near it, at (0.9, 0.9, 0.5), projects into neither of its faces (x = 1 for y > 1,
   // y = 1 for x > 1) and is nearer to it than to any other face.
-  const Model3 model = model_of(cubes({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
+  const Model<3> model = model_of(cubes({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
   const Surface3 s = make_surface3(model, 0);
   Points x = positions_with_slave(model);
   const Points v(x.size(), Vec3::Zero());
@@ -527,7 +527,7 @@ TEST(BodyContact3, ConcaveVertexInsideUsesTheAngleWeightedPseudoNormal) {
       for (int k = 0; k < 2; ++k)
         if (!(i == 1 && j == 0 && k == 1)) cells.push_back({i, j, k});
   for (const bool tets : {false, true}) {
-    const Model3 model = model_of(cubes(cells, tets));
+    const Model<3> model = model_of(cubes(cells, tets));
     const Surface3 s = make_surface3(model, 0);
     Points x = positions_with_slave(model);
     const Points v(x.size(), Vec3::Zero());
@@ -561,7 +561,7 @@ TEST(BodyContact3, SignedDistanceAndDepthInsideABox) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-0.3, 1.3);
   for (const bool tets : {false, true}) {
-    const Model3 model = model_of(box_mesh(size, 3, 2, 2, tets));
+    const Model<3> model = model_of(box_mesh(size, 3, 2, 2, tets));
     const Surface3 s = make_surface3(model, 0);
     Eigen::VectorXd disp(model.num_dofs());
     for (int j = 0; j < model.num_nodes(); ++j)
@@ -615,7 +615,7 @@ TEST(BodyContact3, FrameInvariance) {
   }
   // The face choice on the distorted bodies, faces, edges and vertices alike.
   for (Mesh3& mesh : test_meshes()) {
-    const Model3 model = model_of(mesh);
+    const Model<3> model = model_of(mesh);
     const Surface3 s = make_surface3(model, 0);
     const Mat3 rot = Eigen::AngleAxisd(2.1, Vec3(1.0, 0.5, -0.7).normalized()).toRotationMatrix();
     const Vec3 shift(3.0, -1.0, 0.5);
@@ -667,7 +667,7 @@ TEST(BodyContact3, SurfaceCompletesTheContactSpace) {
   // The contact module's 3D space holds this surface, and its bounding box reads its nodes.
   static_assert(std::is_same_v<Space<3>::Surface, Surface3>);
   static_assert(std::is_same_v<Space<3>::Stencil, StencilN<5>>);
-  const Model3 model = model_of(box_mesh(Vec3(1.0, 0.8, 0.6), 2, 2, 2, false));
+  const Model<3> model = model_of(box_mesh(Vec3(1.0, 0.8, 0.6), 2, 2, 2, false));
   const Surface3 s = make_surface3(model, 0);
   const auto box = surface_box(s, [&](int j) -> Vec3 { return model.ref.col(j); }, s.max_length);
   EXPECT_TRUE(box.lo.isApprox(Vec3::Constant(-0.5)));
@@ -681,7 +681,7 @@ TEST(BodyContact3, QueriesDoNotAllocate) {
     asm volatile("" : : "g"(probe.data()) : "memory");
   }
   ASSERT_GE(g_allocations.load() - before, 1) << "the counter counts";
-  const Model3 model = model_of(test3::distorted_box(3, 2, 2, false, 0.12));
+  const Model<3> model = model_of(test3::distorted_box(3, 2, 2, false, 0.12));
   const Surface3 s = make_surface3(model, 0);
   Points x0 = positions_with_slave(model), x1 = x0;
   const Points v(x0.size(), Vec3::Ones());

@@ -42,7 +42,7 @@ const char* name(Scheme s) {
   return s == Scheme::semi_explicit ? "semi_explicit" : s == Scheme::penalty ? "explicit_penalty" : "implicit";
 }
 
-RunResult run(const Model3& model, RunSettings s, Scheme scheme) {
+RunResult run(const Model<3>& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
     const PenaltyContactT<3> p =
@@ -53,7 +53,7 @@ RunResult run(const Model3& model, RunSettings s, Scheme scheme) {
   return run_explicit(model, s);
 }
 
-BodyInput3 box_body(const std::string& name, Vec3 size, int nx, int ny, int nz, Vec3 origin, Vec3 velocity, bool tets,
+BodyInput<3> box_body(const std::string& name, Vec3 size, int nx, int ny, int nz, Vec3 origin, Vec3 velocity, bool tets,
                     double young = 2.0e11, double density = 8000.0) {
   BoxSpec spec;
   spec.size = size;
@@ -62,7 +62,7 @@ BodyInput3 box_body(const std::string& name, Vec3 size, int nx, int ny, int nz, 
   spec.nz = nz;
   spec.origin = origin;
   spec.tetrahedra = tets;
-  BodyInput3 b;
+  BodyInput<3> b;
   b.name = name;
   b.mesh = make_box(spec);
   b.material = StVenantKirchhoff3::make(young, 0.0, density);
@@ -74,11 +74,11 @@ BodyInput3 box_body(const std::string& name, Vec3 size, int nx, int ny, int nz, 
 // E = 2e11 Pa, nu = 0, rho = 8000 kg/m^3 (c = 5000 m/s), the striker at v0 = 1 m/s along x.
 constexpr double kL = 0.2, kW = 0.02, kE = 2.0e11, kRho = 8000.0;
 struct HeadOn3 {
-  Model3 model;
+  Model<3> model;
   RunSettings settings;
   double mass = 0.0, v0 = 1.0;  // of one bar [kg]
   explicit HeadOn3(bool tets = false, double mu = 0.0, Vec3 velocity = Vec3(1.0, 0.0, 0.0)) {
-    model = build_model3({box_body("striker", Vec3(kL, kW, kW), 40, 2, 2, Vec3(-kL, 0.0, 0.0), velocity, tets),
+    model = build_model({box_body("striker", Vec3(kL, kW, kW), 40, 2, 2, Vec3(-kL, 0.0, 0.0), velocity, tets),
                           box_body("target", Vec3(kL, kW, kW), 40, 2, 2, Vec3::Zero(), Vec3::Zero(), tets)},
                          Vec3::Zero());
     mass = 0.5 * model.mass.sum() / 3.0;
@@ -176,11 +176,11 @@ TEST(BodyContact3Schemes, HeadOnBarsConserveMomentumAndFollowThe1DSolution) {
 // rho = 1000 kg/m^3, no gravity, a one-way pair with friction mu; 2e-4 s at 0.9 x the critical step.
 const Vec3 kObliqueV0(2.0, -1.0, 0.5);
 struct ObliqueImpact {
-  Model3 model;
+  Model<3> model;
   RunSettings settings;
   Vec3 p0 = 1000.0 * 0.04 * 0.02 * 0.02 * kObliqueV0;  // the top block's momentum [kg m/s]
   ObliqueImpact(bool tets, double mu) {
-    model = build_model3(
+    model = build_model(
         {box_body("top", Vec3(0.04, 0.02, 0.02), 4, 2, 2, Vec3(0.01, 0.02, 0.01), kObliqueV0, tets, 1e8, 1000.0),
          box_body("bottom", Vec3(0.1, 0.02, 0.04), 10, 2, 4, Vec3::Zero(), Vec3::Zero(), tets, 1e8, 1000.0)},
         Vec3::Zero());
@@ -319,7 +319,7 @@ TEST(BodyContact3Schemes, PairStepsDoNotAllocate) {
     h.settings.dt = 1e-7;
     ImplicitSettings im;
     im.linear_solver = solver;
-    ImplicitIntegratorT<Model3> integrator(h.model, h.settings, im);
+    ImplicitIntegratorT<Model<3>> integrator(h.model, h.settings, im);
     for (int n = 0; n < 5; ++n) ASSERT_TRUE(integrator.step(false)) << integrator.failure();  // warm up
     const long before = g_allocations.load();
     int active = 0;

@@ -1,5 +1,5 @@
 // 3D cases (docs/case-format.md, 3D cases): the dimension from the meshes, the 3D keys and their
-// errors, the prepared Model3, the scene rotation, and a run's outputs (history columns,
+// errors, the prepared Model<3>, the scene rotation, and a run's outputs (history columns,
 // summary keys, VTU hexahedra) through the program.
 #include <gtest/gtest.h>
 

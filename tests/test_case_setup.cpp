@@ -79,7 +79,7 @@ TEST(CaseSetup, BodiesStartSpinning) {
   const double omega = 30.0;
   const PreparedCase still = prepare(kRect);
   const PreparedCase spin = prepare(kRect, {"bodies[0].angular_velocity=30.0"});
-  const Model& m = spin.model;
+  const Model<2>& m = spin.model;
   Vec2 centre = Vec2::Zero(), p = Vec2::Zero();
   double mass = 0.0;
   for (int i = 0; i < m.num_nodes(); ++i) {
@@ -128,7 +128,7 @@ nodes = "left"
 velocity = [0.0, 3.0]
 )";
   const PreparedCase pc = prepare(text);
-  const Model& m = pc.model;
+  const Model<2>& m = pc.model;
   const Mesh& mesh = pc.meshes[0];
   std::vector<int> kind(m.num_nodes(), 0);
   for (int i : mesh.node_sets.at("top")) kind[i] = 1;

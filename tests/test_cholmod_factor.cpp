@@ -25,7 +25,7 @@ using verification::ElementKind;
 // pattern and the values the factorization meets in a run. s = 0 gives the (diagonal) mass.
 RowMajor iteration_matrix(ElementKind kind, double k_scale, int nx = 9, int ny = 4) {
   const Mesh mesh = verification::grid_mesh(2.0, 0.8, nx, ny, 0.2, kind);
-  const Model model = verification::single_body_model(
+  const Model<2> model = verification::single_body_model(
       mesh, StVenantKirchhoff::make(2.0e11, 0.3, 7800.0, PlaneMode::strain), PlaneMode::strain, kind);
   SystemMatrix s = make_system_matrix(model);
   Eigen::VectorXd u(model.num_dofs()), v = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());

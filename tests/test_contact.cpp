@@ -314,7 +314,7 @@ struct StepRecord {
 };
 
 struct Impact {
-  Model model;
+  Model<2> model;
   std::vector<Obstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   ContactSettings settings;
   double mu = 0.0;
@@ -392,7 +392,7 @@ Impact make_impact(double width, double height, int nx, int ny, double angle, do
   return im;
 }
 
-double total_mass(const Model& m) { return 0.5 * m.mass.sum(); }
+double total_mass(const Model<2>& m) { return 0.5 * m.mass.sum(); }
 
 TEST(ContactImpact, CornerStopsOnTheLineWithoutPenetration) {
   // A 10 mm square of 2 x 2 cells tilted by 30 degrees: one corner node is lowest and hits
@@ -613,7 +613,7 @@ TEST(ContactImpact, FrictionlessPairNeverPullsWhenAnotherPairHasFriction) {
     for (double lift : {0.2e-6, 0.5e-6, 0.8e-6, 1.1e-6, 1.5e-6, 1.9e-6}) {
       Mesh mesh = grid_mesh(size, size, 1, 1, 0.0, false);
       mesh.nodes.row(1).array() += step + lift;
-      Model model = single_body_model(mesh, StVenantKirchhoff::make(1e9, 0.0, 1000.0, PlaneMode::stress),
+      Model<2> model = single_body_model(mesh, StVenantKirchhoff::make(1e9, 0.0, 1000.0, PlaneMode::stress),
                                       PlaneMode::stress, ElementKind::q4_full, 0.01);
       for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i + 1] = -1.0;
       const std::vector<Obstacle> obstacles = {{"ground", Vec2::Zero(), Vec2::UnitY()},

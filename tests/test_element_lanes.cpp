@@ -1,4 +1,4 @@
-// The vectorized force kernels (element_kernels.hpp, material_lanes.hpp) against the serial
+// The vectorized force kernels (element_kernels2.hpp, material_lanes.hpp) against the serial
 // formulation written out here with Eigen, cell by cell, as the kernels computed it before
 // they were batched: every element type x every material x plane stress and strain, on a
 // distorted mesh whose cell count (35) leaves a partial last batch. Built with
@@ -41,7 +41,7 @@ struct Reference {
 };
 
 // The serial force pass: gather, F, P(F), fe = sum vol dN/dX P^T (+ hourglass forces), scatter.
-Reference serial_forces(const Model& model, const double* u, const double* v) {
+Reference serial_forces(const Model<2>& model, const double* u, const double* v) {
   Reference r;
   r.f = Eigen::VectorXd::Zero(model.num_dofs());
   auto point = [&](const auto& mat, const auto& ue, const auto& dndx, double vol, auto& fe) {
@@ -102,7 +102,7 @@ std::vector<std::pair<std::string, Material>> materials(PlaneMode plane) {
 }
 
 // A smooth field of strain ~ amplitude on the mesh's nodes (2n, interleaved).
-Eigen::VectorXd field(const Model& model, double amplitude) {
+Eigen::VectorXd field(const Model<2>& model, double amplitude) {
   Eigen::VectorXd a(model.num_dofs());
   for (int i = 0; i < model.num_nodes(); ++i) {
     const double x = model.ref(0, i), y = model.ref(1, i);
@@ -124,7 +124,7 @@ TEST(ElementLanes, ForcePassEqualsTheSerialFormulation) {
       for (const ElementKind kind : all_element_kinds()) {
         SCOPED_TRACE(std::string(element_name(kind)) + ", " + name + (plane == PlaneMode::stress ? ", plane stress" : ", plane strain"));
         // 7 x 5 quads (35 cells, 35 % 8 = 3) or 70 triangles (70 % 8 = 6): a partial last batch.
-        const Model model = single_body_model(grid_mesh(1.4, 1.0, 7, 5, 0.2, kind), material, plane, kind, 0.01, 0.1);
+        const Model<2> model = single_body_model(grid_mesh(1.4, 1.0, 7, 5, 0.2, kind), material, plane, kind, 0.01, 0.1);
         const Eigen::VectorXd u = field(model, 0.05), v = field(model, 3.0);
         const Reference ref = serial_forces(model, u.data(), v.data());
         Eigen::VectorXd f(model.num_dofs());
@@ -161,7 +161,7 @@ TEST(ElementLanes, StressTrackingEqualsTheSeparatePasses) {
     for (const ElementKind kind : all_element_kinds())
       for (const StressMeasure measure : {StressMeasure::cauchy, StressMeasure::pk2, StressMeasure::kirchhoff}) {
         SCOPED_TRACE(std::string(element_name(kind)) + ", " + name + ", measure " + std::to_string(static_cast<int>(measure)));
-        const Model model = single_body_model(grid_mesh(1.4, 1.0, 7, 5, 0.2, kind), material, plane, kind, 0.01, 0.1);
+        const Model<2> model = single_body_model(grid_mesh(1.4, 1.0, 7, 5, 0.2, kind), material, plane, kind, 0.01, 0.1);
         const Eigen::VectorXd u = field(model, 0.05), v = field(model, 3.0);
         std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
         for (std::size_t c = 0; c < contact_cell.size(); c += 4) contact_cell[c] = 1;

@@ -53,20 +53,20 @@ Mat2 rotation(double angle) {
 }
 
 // u_I = (G) X_I + c for every node: a homogeneous displacement gradient G plus a translation.
-Eigen::VectorXd affine_field(const Model& model, const Mat2& g, const Vec2& c) {
+Eigen::VectorXd affine_field(const Model<2>& model, const Mat2& g, const Vec2& c) {
   Eigen::VectorXd u(model.num_dofs());
   for (int i = 0; i < model.num_nodes(); ++i) u.segment<2>(2 * i) = g * model.ref.col(i) + c;
   return u;
 }
 
 // Total stored energy: strain energy plus the stiffness-form hourglass energy.
-double stored_energy(const Model& model, const Eigen::VectorXd& u, Eigen::VectorXd& f) {
+double stored_energy(const Model<2>& model, const Eigen::VectorXd& u, Eigen::VectorXd& f) {
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(model.num_dofs());
   const ForceTotals t = internal_forces(model, u.data(), v.data(), f.data(), true);
   return t.strain_energy + t.hourglass_energy;
 }
 
-Eigen::VectorXd forces(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+Eigen::VectorXd forces(const Model<2>& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
   Eigen::VectorXd f(model.num_dofs());
   internal_forces(model, u.data(), v.data(), f.data(), false);
   return f;
@@ -92,7 +92,7 @@ TEST(Elements, ForcesAreEnergyGradient) {
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds()) {
       const Mesh mesh = distorted_mesh(kind);
-      const Model model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
+      const Model<2> model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
       std::mt19937 gen(42);
       std::uniform_real_distribution<double> amp(-0.04, 0.04);
       Eigen::VectorXd u(model.num_dofs());
@@ -121,7 +121,7 @@ TEST(Elements, RigidMotionGivesNoForce) {
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds()) {
       const Mesh mesh = distorted_mesh(kind);
-      const Model model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
+      const Model<2> model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
       const double scale = kYoung * kThickness * std::sqrt(total_area(mesh));
       const Vec2 c(0.37, -0.81);
       const Mat2 r = rotation(M_PI / 3.0);
@@ -153,7 +153,7 @@ TEST(Elements, PatchTestHomogeneousDeformation) {
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds()) {
       const Mesh mesh = distorted_mesh(kind);
-      const Model model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
+      const Model<2> model = single_body_model(mesh, mc.material, mc.plane, kind, kThickness);
       const Eigen::VectorXd u = affine_field(model, f - Mat2::Identity(), Vec2(0.1, 0.2));
       Mat2 l;  // a homogeneous velocity gradient for the viscous hourglass form
       l << 30.0, -12.0, 7.0, -21.0;
@@ -226,9 +226,9 @@ TEST(Elements, HourglassForcesActOnTheHourglassModeOnly) {
   const double coeff = 0.1;
   const Eigen::Vector4d h(1.0, -1.0, 1.0, -1.0);
   for (const MaterialCase& mc : material_cases()) {
-    const Model visc =
+    const Model<2> visc =
         single_body_model(mesh, mc.material, mc.plane, ElementKind::q4_viscous, kThickness, coeff);
-    const Model stiff = single_body_model(mesh, mc.material, mc.plane, ElementKind::q4_stiffness,
+    const Model<2> stiff = single_body_model(mesh, mc.material, mc.plane, ElementKind::q4_stiffness,
                                           kThickness, coeff);
     const double cp = material_wave_speed(mc.material);
     const double c_visc = coeff * kDensity * cp * kThickness * std::sqrt(qd.area);
@@ -289,7 +289,7 @@ TEST(Elements, LumpedMassesSumToBodyMass) {
   // 1e-13 relative is the round-off of summing a few dozen terms.
   for (ElementKind kind : all_element_kinds()) {
     const Mesh mesh = distorted_mesh(kind);
-    const Model model = single_body_model(mesh, StVenantKirchhoff::make(kYoung, kPoisson, kDensity,
+    const Model<2> model = single_body_model(mesh, StVenantKirchhoff::make(kYoung, kPoisson, kDensity,
                                                                         PlaneMode::stress),
                                           PlaneMode::stress, kind, kThickness);
     const double expect = kDensity * kThickness * total_area(mesh);
@@ -306,7 +306,7 @@ TEST(Elements, LumpedMassesSumToBodyMass) {
 
 // Largest angular frequency of one free element: K = d f_int / du at u = 0 by central
 // differences, then the largest eigenvalue of M^-1/2 K M^-1/2.
-double omega_max(const Model& model) {
+double omega_max(const Model<2>& model) {
   const int n = model.num_dofs();
   const double h = 1e-9;  // [m]; elements are ~1 m, so the nonlinear part is ~1e-9 relative
   Eigen::MatrixXd k(n, n);
@@ -363,7 +363,7 @@ TEST(Elements, CriticalStepEstimateIsConservative) {
                      : Material(NeoHookean::make(kYoung, nu, kDensity, plane));
         for (ElementKind kind : all_element_kinds())
           for (const Shape& s : kind == ElementKind::t3 ? tris : quads) {
-            const Model model = single_body_model(s.mesh, material, plane, kind, kThickness);
+            const Model<2> model = single_body_model(s.mesh, material, plane, kind, kThickness);
             const double dt_true = 2.0 / omega_max(model);
             const double ratio = model.cell_dt[0] / dt_true;
             EXPECT_LE(ratio, 1.0) << element_name(kind) << " " << s.name << " nu " << nu;
@@ -378,7 +378,7 @@ TEST(Elements, CriticalStepEstimateIsConservative) {
 TEST(Elements, BuildModelRejectsBadCells) {
   const Material mat = StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::stress);
   auto build = [&](const Mesh& m) {
-    BodyInput b;
+    BodyInput<2> b;
     b.name = "plate";
     b.mesh = m;
     b.material = mat;

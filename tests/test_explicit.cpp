@@ -32,9 +32,9 @@ constexpr double kDensity = 7800.0;  // [kg/m^3]
 // The free-vibration body of (a), (c), (f): a 4 m x 1 m plane-strain SVK slab, 16 x 4 cells,
 // with a smooth velocity field: bending v_y = V0 cos(2 pi x / L) plus breathing
 // v_x = V1 (x - L/2) / (L/2) (no net momentum; strains ~ V/c ~ 2e-4).
-Model vibrating_slab(ElementKind kind, double distortion = 0.0) {
+Model<2> vibrating_slab(ElementKind kind, double distortion = 0.0) {
   const Mesh mesh = grid_mesh(4.0, 1.0, 16, 4, distortion, kind);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain),
       PlaneMode::strain, kind);
   for (int i = 0; i < model.num_nodes(); ++i) {
@@ -52,7 +52,7 @@ TEST(Explicit, EnergyErrorIsSecondOrderInDt) {
   // 2.4 ms window (about one bending period). The accepted band 2 +- 0.3 is the brief's; the
   // smooth initial field keeps the excited modes at omega dt << 1, so the O(dt^4) remainder
   // is small and the observed orders sit well inside it.
-  const Model model = vibrating_slab(ElementKind::q4_full);
+  const Model<2> model = vibrating_slab(ElementKind::q4_full);
   const double dt0 = 0.4 * model.critical_dt;
   const int steps0 = 160;
   std::vector<double> err;
@@ -93,7 +93,7 @@ double dalembert_error(int nx, double courant) {
   const double length = 1.0, h = length / nx, travel = 0.5;
   const Mesh mesh = grid_mesh(length, h, nx, 1, 0.0, false);
   const Material mat = StVenantKirchhoff::make(kYoung, 0.0, kDensity, PlaneMode::stress);
-  Model model = single_body_model(mesh, mat, PlaneMode::stress, ElementKind::q4_full);
+  Model<2> model = single_body_model(mesh, mat, PlaneMode::stress, ElementKind::q4_full);
   const double c = std::sqrt(kYoung / kDensity);
   const Pulse pulse;
   Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
@@ -151,7 +151,7 @@ TEST(Explicit, DalembertPulseConvergesAtSecondOrder) {
 
 
 // Total momentum sum_I m_I v_I of the initial velocity field [kg m/s].
-Vec2 initial_momentum(const Model& model) {
+Vec2 initial_momentum(const Model<2>& model) {
   Vec2 p = Vec2::Zero();
   for (int i = 0; i < model.num_nodes(); ++i)
     p += model.mass[2 * i] * model.initial_velocity.segment<2>(2 * i);
@@ -165,7 +165,7 @@ TEST(Explicit, LinearMomentumOfFreeBodyIsConserved) {
   // 400 steps in the worst case (measured ~1e-15). 1e-12 is a round-off bound, while a single
   // unbalanced force term would change the momentum at O(1).
   for (ElementKind kind : verification::all_element_kinds()) {
-    Model model = vibrating_slab(kind, 0.2);
+    Model<2> model = vibrating_slab(kind, 0.2);
     for (int i = 0; i < model.num_nodes(); ++i)
       model.initial_velocity.segment<2>(2 * i) += Vec2(3.0, -2.0);
     double scale = 0.0;
@@ -196,7 +196,7 @@ TEST(Explicit, FreeFallUnderGravity) {
   const Vec2 g(0.0, -9.81), v0(1.5, 2.0);
   for (ElementKind kind : verification::all_element_kinds()) {
     const Mesh mesh = grid_mesh(1.0, 0.5, 4, 2, 0.2, kind);
-    Model model = single_body_model(
+    Model<2> model = single_body_model(
         mesh, NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::stress), PlaneMode::stress,
         kind, 0.01, 0.1, g);
     for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity.segment<2>(2 * i) = v0;
@@ -243,7 +243,7 @@ TEST(Explicit, CentreOfMassOfVibratingBodyFallsExactly) {
   // mass-weighted sum carries round-off of the individual nodal displacements, so the error is
   // measured against |expected| + max_I |u_I|; 1e-12 of that is a round-off bound (400 steps).
   const Vec2 g(3.0, -9.81);
-  Model model = vibrating_slab(ElementKind::q4_full, 0.2);
+  Model<2> model = vibrating_slab(ElementKind::q4_full, 0.2);
   model.gravity = g;
   double mass = 0.0;
   for (int i = 0; i < model.num_nodes(); ++i) mass += model.mass[2 * i];
@@ -268,7 +268,7 @@ TEST(Explicit, CentreOfMassOfVibratingBodyFallsExactly) {
 // right end pulled at V = 1 m/s, both through prescribed velocities.
 struct PulledBar {
   Mesh mesh = grid_mesh(2.0, 0.1, 40, 2, 0.0, false);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, StVenantKirchhoff::make(kYoung, 0.0, kDensity, PlaneMode::stress),
       PlaneMode::stress, ElementKind::q4_full);
   std::vector<PrescribedDof> prescribed() const {
@@ -327,7 +327,7 @@ TEST(Explicit, PrescribedVelocityWorkIsAccounted) {
 
 // The true stability limit 2 / omega_max of a whole free model: K = d f_int / du at u = 0 by
 // central differences, largest eigenvalue of M^-1/2 K M^-1/2 (dense; small models only).
-double true_critical_dt(const Model& model) {
+double true_critical_dt(const Model<2>& model) {
   const int n = model.num_dofs();
   const double h = 1e-9;  // [m]; cells are ~0.25 m, so the nonlinear part is ~1e-8 relative
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
@@ -353,7 +353,7 @@ TEST(Explicit, DivergenceIsDetected) {
   // detection relies on the run's own monitor (every 50 steps) and its per-step Jacobian
   // check: the run must stop long before its planned 1000 steps (a quarter is a generous
   // bound; the first energy check is at step 50). dt = 0.9 x the estimate runs to the end.
-  const Model model = vibrating_slab(ElementKind::q4_full);
+  const Model<2> model = vibrating_slab(ElementKind::q4_full);
   const double dt_true = true_critical_dt(model);
   std::printf("[explicit] slab 16x4 Q4 2x2: critical_dt estimate / true limit %.3f\n",
               model.critical_dt / dt_true);
@@ -389,7 +389,7 @@ TEST(Explicit, EnergyGrowthLimitTrips) {
   // the run must stop at exactly the first step where the total energy exceeds
   // energy_growth_limit x the reference energy (max(E0, |W_ext|), here E0), found
   // independently by replaying the same steps, with a reason naming the energy.
-  const Model model = vibrating_slab(ElementKind::q4_full);
+  const Model<2> model = vibrating_slab(ElementKind::q4_full);
   RunSettings s;
   s.dt = 1.03 * true_critical_dt(model);
   s.end_time = 2000 * s.dt;
@@ -423,7 +423,7 @@ TEST(Explicit, InvertedElementIsDetected) {
   // A block whose initial velocity field converges on its centre at ~10 x the wave speed has
   // far more kinetic energy than the elements can store: cells invert within a few steps.
   const Mesh mesh = grid_mesh(1.0, 1.0, 4, 4, 0.0, false);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain),
       PlaneMode::strain, ElementKind::q4_full);
   for (int i = 0; i < model.num_nodes(); ++i)
@@ -449,7 +449,7 @@ TEST(Explicit, HistoryLayout) {
       "contact_nodes", "normal_force",   "tangential_force", "contact_work",
       "contact_stick", "contact_slip",   "contact_iterations", "contact_energy",
       "angular_momentum", "contact_work_normal", "contact_status_changes"};
-  const Model model = vibrating_slab(ElementKind::q4_viscous, 0.2);
+  const Model<2> model = vibrating_slab(ElementKind::q4_viscous, 0.2);
   const std::vector<Probe> probes = {{"tip", 16}, {"mid", 42}};
   RunSettings s;
   s.dt = 0.5 * model.critical_dt;
@@ -529,7 +529,7 @@ TEST(Explicit, AngularMomentumOfSpinningBodyIsConservedAboutItsCentre) {
   // with full 2x2 integration), and L_n = sum m x_n x v_n is the mean of its values at
   // n -/+ 1/2, so L stays omega I to round-off while the slab turns by ~1.2 rad and vibrates
   // under the centrifugal load.
-  Model model = vibrating_slab(ElementKind::q4_full, 0.2);
+  Model<2> model = vibrating_slab(ElementKind::q4_full, 0.2);
   const double omega = 50.0;  // [rad/s]
   const Vec2 v0(3.0, -2.0);   // [m/s]
   double mass = 0.0, inertia = 0.0;

@@ -1,4 +1,4 @@
-// The explicit loop on a 3D model (docs/three-dimensions.md, Runs in 3D): run_explicit<Model3>
+// The explicit loop on a 3D model (docs/three-dimensions.md, Runs in 3D): run_explicit<Model<3>>
 // with rigid obstacles, by the semi-explicit bi-potential contact and by the penalty springs.
 // - a bar hits a rigid wall end-on (nu = 0, the 1D solution: force rho c v0 A for 2L/c, then
 //   rebound at v0), for every element formulation, and by the implicit scheme (run_implicit);
@@ -40,19 +40,19 @@ std::vector<double> column(const History& h, const std::string& name) {
 // and a plane wave runs at c = sqrt(E/rho) = 5000 m/s.
 constexpr double kL = 0.2, kW = 0.02, kE = 2.0e11, kRho = 8000.0, kV0 = 1.0;
 
-Model3 bar_model(Kind kind) {
+Model<3> bar_model(Kind kind) {
   BoxSpec spec;
   spec.size = Vec3(kL, kW, kW);
   spec.nx = 200;  // cells of 1 x 10 x 10 mm, as the 2D case's 200 x 2
   spec.ny = 2;
   spec.nz = 2;
   spec.tetrahedra = test3::is_tet(kind);
-  BodyInput3 b = test3::body_of(kind, make_box(spec), StVenantKirchhoff3::make(kE, 0.0, kRho), "bar");
+  BodyInput<3> b = test3::body_of(kind, make_box(spec), StVenantKirchhoff3::make(kE, 0.0, kRho), "bar");
   b.initial_velocity = Vec3(-kV0, 0.0, 0.0);
-  return build_model3({b}, Vec3::Zero());
+  return build_model({b}, Vec3::Zero());
 }
 
-RunSettings bar_settings(const Model3& model, RunSettings::ContactMethod method) {
+RunSettings bar_settings(const Model<3>& model, RunSettings::ContactMethod method) {
   RunSettings s;
   s.dt = 0.9 * model.critical_dt;
   s.end_time = 1.2e-4;  // 2L/c = 8e-5 s of contact, then free flight
@@ -103,7 +103,7 @@ TEST(Explicit3, BarOnRigidWallSemiExplicit) {
   const double c = std::sqrt(kE / kRho), force = kRho * c * kV0 * kW * kW, duration = 2.0 * kL / c;
   for (Kind kind : {Kind::hex8, Kind::hex8_viscous, Kind::hex8_stiffness, Kind::tet4}) {
     SCOPED_TRACE(test3::kind_name(kind));
-    const Model3 model = bar_model(kind);
+    const Model<3> model = bar_model(kind);
     const double m = model.mass.sum() / 3.0;
     EXPECT_NEAR(m, kRho * kL * kW * kW, 1e-12 * m);
     const RunResult r = run_explicit(model, bar_settings(model, RunSettings::ContactMethod::bipotential));
@@ -126,7 +126,7 @@ TEST(Explicit3, BarOnRigidWallSemiExplicit) {
   }
 }
 
-// The implicit scheme (run_implicit<Model3>: the 3D system matrix of tangent3.cpp, the contact
+// The implicit scheme (run_implicit<Model<3>>: the 3D system matrix of tangent3.cpp, the contact
 // condensed on three directions per node) on the same bar at a fixed 1e-7 s (0.2 x the critical
 // step, as the 2D case B1: 800 steps over the contact): the 1D solution within 2 %, no node
 // behind the wall. The 2x2x2 hexahedra, and the one-point hexahedra with the viscous hourglass
@@ -135,7 +135,7 @@ TEST(Explicit3, BarOnRigidWallImplicit) {
   const double c = std::sqrt(kE / kRho), force = kRho * c * kV0 * kW * kW, duration = 2.0 * kL / c;
   for (Kind kind : {Kind::hex8, Kind::hex8_viscous}) {
     SCOPED_TRACE(test3::kind_name(kind));
-    const Model3 model = bar_model(kind);
+    const Model<3> model = bar_model(kind);
     const double m = model.mass.sum() / 3.0;
     RunSettings s = bar_settings(model, RunSettings::ContactMethod::bipotential);
     s.dt = 1e-7;
@@ -163,7 +163,7 @@ TEST(Explicit3, BarOnRigidWallImplicit) {
 // the plateau, the duration and the rebound are within 2 %.
 TEST(Explicit3, BarOnRigidWallPenalty) {
   const double c = std::sqrt(kE / kRho), force = kRho * c * kV0 * kW * kW, duration = 2.0 * kL / c;
-  const Model3 model = bar_model(Kind::hex8);
+  const Model<3> model = bar_model(Kind::hex8);
   const double m = model.mass.sum() / 3.0;
   RunSettings s = bar_settings(model, RunSettings::ContactMethod::penalty);
   s.penalty.scale_factor = 1.0;
@@ -188,9 +188,9 @@ TEST(Explicit3, BarOnRigidWallPenalty) {
 TEST(Explicit3, FreeSpinningBlockConservesMomenta) {
   for (Kind kind : {Kind::hex8, Kind::hex8_stiffness, Kind::tet4}) {
     SCOPED_TRACE(test3::kind_name(kind));
-    BodyInput3 b = test3::body_of(kind, test3::distorted_box(3, 3, 2, test3::is_tet(kind), 0.1),
+    BodyInput<3> b = test3::body_of(kind, test3::distorted_box(3, 3, 2, test3::is_tet(kind), 0.1),
                                   NeoHookean3::make(test3::kYoung, test3::kPoisson, test3::kDensity));
-    Model3 model = build_model3({b}, Vec3::Zero());
+    Model<3> model = build_model({b}, Vec3::Zero());
     const Vec3 v0(1.0, -2.0, 0.5), w(30.0, -10.0, 20.0);  // [m/s], [rad/s]
     Vec3 centre = Vec3::Zero();
     for (int i = 0; i < model.num_nodes(); ++i) centre += model.mass[3 * i] * model.ref.col(i);
@@ -248,9 +248,9 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
         v0 = q * v0;
         n = q * n;
       }
-      BodyInput3 b = test3::body_of(Kind::hex8, std::move(mesh), NeoHookean3::make(1e7, 0.3, 1000.0), "block");
+      BodyInput<3> b = test3::body_of(Kind::hex8, std::move(mesh), NeoHookean3::make(1e7, 0.3, 1000.0), "block");
       b.initial_velocity = v0;
-      const Model3 model = build_model3({b}, Vec3::Zero());
+      const Model<3> model = build_model({b}, Vec3::Zero());
       RunSettings s;
       s.contact_method = method;
       s.obstacles3 = {make_plane_obstacle3("ground", Vec3::Zero(), n)};
@@ -297,13 +297,13 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
   }
 }
 
-// StepControlT<Model3>::critical() at u = 0 is model.critical_dt bit for bit, on the threads or
+// StepControlT<Model<3>>::critical() at u = 0 is model.critical_dt bit for bit, on the threads or
 // not, and the cell it names is model.critical_cell; a uniform scaling of the configuration by
 // s scales the step by s.
 TEST(Explicit3, CriticalStepOfTheCurrentConfiguration) {
   for (Kind kind : test3::kAllKinds) {
     SCOPED_TRACE(test3::kind_name(kind));
-    const Model3 model = build_model3(
+    const Model<3> model = build_model(
         {test3::body_of(kind, test3::distorted_box(3, 2, 2, test3::is_tet(kind), 0.12),
                         StVenantKirchhoff3::make(test3::kYoung, test3::kPoisson, test3::kDensity))},
         Vec3::Zero());
@@ -311,7 +311,7 @@ TEST(Explicit3, CriticalStepOfTheCurrentConfiguration) {
     s.dt = model.critical_dt;
     s.end_time = 1.0;
     s.dt_update_interval = 1;
-    const StepControlT<Model3> control(model, s, std::numeric_limits<double>::infinity());
+    const StepControlT<Model<3>> control(model, s, std::numeric_limits<double>::infinity());
     int cell = -1;
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(model.num_dofs());
     EXPECT_EQ(control.critical(zero, &cell), model.critical_dt);
@@ -334,7 +334,7 @@ TEST(Explicit3, PenaltyStiffnessIsBulkModulusAreaSquaredOverVolume) {
   BoxSpec spec;
   spec.size = Vec3(h, h, h);
   const Material3 law = StVenantKirchhoff3::make(2e7, 0.25, 1000.0);
-  const Model3 model = build_model3({test3::body_of(Kind::hex8, make_box(spec), law)}, Vec3::Zero());
+  const Model<3> model = build_model({test3::body_of(Kind::hex8, make_box(spec), law)}, Vec3::Zero());
   const double bulk = penalty_bulk_modulus(law);
   EXPECT_NEAR(bulk, 2e7 / (3.0 * (1.0 - 2.0 * 0.25)), 1e-9 * bulk);
   PenaltySettings ps;

@@ -39,9 +39,9 @@ constexpr double kDensity = 7800.0;  // [kg/m^3]
 // The free-vibration body of test_explicit: a 4 m x 1 m plane-strain SVK slab, 16 x 4 Q4 2x2
 // cells, bending v_y = A cos(2 pi x / L) plus breathing v_x = A/2 (x - L/2) / (L/2) with A =
 // `amplitude` m/s (no net momentum; strains ~ A / c ~ 2e-4 A). Bending period ~3.7 ms.
-Model vibrating_slab(double amplitude = 1.0, double distortion = 0.0) {
+Model<2> vibrating_slab(double amplitude = 1.0, double distortion = 0.0) {
   const Mesh mesh = grid_mesh(4.0, 1.0, 16, 4, distortion, false);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain),
       PlaneMode::strain, ElementKind::q4_full);
   for (int i = 0; i < model.num_nodes(); ++i) {
@@ -63,7 +63,7 @@ struct SlabRun {
   int tip_crossings = 0;    // sign changes of the tip's u_y
 };
 
-SlabRun run_slab(const Model& model, double dt, double end_time, double theta,
+SlabRun run_slab(const Model<2>& model, double dt, double end_time, double theta,
                  double newton_tolerance = ImplicitSettings{}.newton_tolerance) {
   RunSettings s;
   s.dt = dt;
@@ -96,7 +96,7 @@ TEST(Implicit, TrapezoidalConservesEnergyAtAnyStep) {
   // a linear problem, see the header) is checked by doubling the amplitude: the relative error
   // then doubles (measured ratios 2.03 and 2.01; accepted 1.9 .. 2.1). A scheme error of its own
   // (e.g. a force average that is not trapezoidal) would not scale with the amplitude.
-  const Model slab = vibrating_slab(1.0), slab2 = vibrating_slab(2.0);
+  const Model<2> slab = vibrating_slab(1.0), slab2 = vibrating_slab(2.0);
   const double crit = slab.critical_dt;
   struct Case {
     double factor, bound;
@@ -137,7 +137,7 @@ TEST(Implicit, ThetaAboveHalfDissipatesMonotonically) {
   // did not converge" once the vibration has decayed (a solver bug, reproduced by
   // DISABLED_NewtonConvergesWhileTheVibrationDecays below). 1e-8 relative in the momentum
   // balance changes the energy by ~1e-8 E0 per step, far below the rises allowed here.
-  const Model slab = vibrating_slab(1.0);
+  const Model<2> slab = vibrating_slab(1.0);
   const double crit = slab.critical_dt;
   struct Case {
     double factor, end_time;
@@ -168,9 +168,9 @@ TEST(Implicit, ThetaAboveHalfDissipatesMonotonically) {
 // (-y, x)] about the centre, with s = 0.4 and c = sqrt(E / rho). One step of 5 x the critical
 // step then compresses the cells by 17 % in area (min det F = 0.83 measured) and turns them by
 // ~0.2 rad: a genuinely nonlinear step (4-5 Newton iterations).
-Model spinning_block(const Material& material) {
+Model<2> spinning_block(const Material& material) {
   const Mesh mesh = grid_mesh(1.0, 1.0, 6, 6, 0.15, false);
-  Model model = single_body_model(mesh, material, PlaneMode::strain, ElementKind::q4_full);
+  Model<2> model = single_body_model(mesh, material, PlaneMode::strain, ElementKind::q4_full);
   const double c = std::sqrt(kYoung / kDensity), s = 0.4;
   for (int i = 0; i < model.num_nodes(); ++i) {
     const Vec2 x = model.ref.col(i) - Vec2(0.5, 0.5);
@@ -201,7 +201,7 @@ TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
       {"neo-Hookean", NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::strain)},
       {"SVK", StVenantKirchhoff::make(kYoung, kPoisson, kDensity, PlaneMode::strain)}};
   for (const auto& [name, material] : materials) {
-    const Model model = spinning_block(material);
+    const Model<2> model = spinning_block(material);
     for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
       const char* solver_name = solver == LinearSolverKind::pcg ? "pcg" : "direct";
       SCOPED_TRACE(std::string(name) + " " + solver_name);
@@ -250,7 +250,7 @@ TEST(Implicit, NewtonConvergesQuadraticallyOnALargeDeformationStep) {
 }
 
 // Total momentum sum_I m_I v_I of the initial velocity field [kg m/s].
-Vec2 initial_momentum(const Model& model) {
+Vec2 initial_momentum(const Model<2>& model) {
   Vec2 p = Vec2::Zero();
   for (int i = 0; i < model.num_nodes(); ++i)
     p += model.mass[2 * i] * model.initial_velocity.segment<2>(2 * i);
@@ -267,7 +267,7 @@ TEST(Implicit, LinearMomentumOfFreeBodyIsConserved) {
   // solver with its default modified Newton). Bound 1e-13:
   // round-off accumulated over 400 steps, while a single unbalanced force term (or a
   // reaction-like residual left in G) would change the momentum at O(1e-10) or more.
-  Model model = vibrating_slab(1.0, 0.2);
+  Model<2> model = vibrating_slab(1.0, 0.2);
   for (int i = 0; i < model.num_nodes(); ++i)
     model.initial_velocity.segment<2>(2 * i) += Vec2(3.0, -2.0);
   double scale = 0.0;
@@ -310,7 +310,7 @@ TEST(Implicit, LinearSolversGiveTheSameTrajectory) {
   // linear solver 1e4 x less accurate than configured fails it. Both run full Newton (the direct
   // solver with refactor_contraction = 0), so that only the linear solver differs; modified
   // Newton against full Newton is NewtonWithAReusedFactorMatchesFullNewton.
-  const Model model = vibrating_slab(1.0, 0.2);
+  const Model<2> model = vibrating_slab(1.0, 0.2);
   for (double factor : {0.5, 2.0}) {
     std::vector<RunResult> runs;
     for (LinearSolverKind solver : {LinearSolverKind::pcg, LinearSolverKind::direct}) {
@@ -354,7 +354,7 @@ TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
   // Modified Newton must actually reuse the factor (fewer than half as many factorizations as
   // iterations), and refactor_iterations = 1 must refactorize in every iteration but the first
   // of each step (which keeps the factor of the previous step's last iteration).
-  const Model model = vibrating_slab(1.0, 0.2);
+  const Model<2> model = vibrating_slab(1.0, 0.2);
   for (double factor : {0.5, 5.0}) {
     std::vector<RunResult> runs;
     for (double contraction : {0.0, ImplicitSettings{}.refactor_contraction, -1.0, -2.0}) {
@@ -423,7 +423,7 @@ TEST(Implicit, FreeFallUnderGravity) {
   //   as in test_explicit (measured 1.8e-10 .. 2.1e-10, floor 1.8e-9).
   const Vec2 g(2.0, -9.81), v0(1.5, 2.0);
   const Mesh mesh = grid_mesh(1.0, 0.5, 4, 2, 0.2, false);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::stress), PlaneMode::stress,
       ElementKind::q4_full, 0.01, 0.1, g);
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity.segment<2>(2 * i) = v0;
@@ -487,7 +487,7 @@ TEST(Implicit, FreeFallUnderGravity) {
 // right end pulled at V through prescribed velocities (as in test_explicit).
 struct PulledBar {
   Mesh mesh = grid_mesh(2.0, 0.1, 40, 2, 0.0, false);
-  Model model = single_body_model(
+  Model<2> model = single_body_model(
       mesh, StVenantKirchhoff::make(kYoung, 0.0, kDensity, PlaneMode::stress),
       PlaneMode::stress, ElementKind::q4_full);
   std::vector<PrescribedDof> prescribed(double speed) const {
@@ -552,7 +552,7 @@ TEST(Implicit, PrescribedVelocityWorkIsAccounted) {
 // the run stopped as "diverged" (dt = 5 x crit at step 41). The scale is now the largest seen
 // in the run, so the run completes.
 TEST(Implicit, NewtonConvergesWhileTheVibrationDecays) {
-  const Model slab = vibrating_slab(1.0);
+  const Model<2> slab = vibrating_slab(1.0);
   const SlabRun r = run_slab(slab, 5.0 * slab.critical_dt, kTenPeriods, 1.0);
   EXPECT_EQ(r.result.status, RunStatus::ok) << r.result.reason << " at step " << r.result.diverged_step;
 }
@@ -571,7 +571,7 @@ namespace {
 // it settles by 1.2e-8 m under its weight and must not drift (< 1e-7 m in 5 ms).
 TEST(Implicit, BodyAtRestInContactUnderGravityStarts) {
   const Mesh mesh = verification::grid_mesh(0.1, 0.05, 10, 5, 0.0, false);
-  const Model model = verification::single_body_model(
+  const Model<2> model = verification::single_body_model(
       mesh, StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress), PlaneMode::stress,
       verification::ElementKind::q4_full, 0.05, 0.1, Vec2(0.0, -9.81));
   for (const LinearSolverKind solver : {LinearSolverKind::automatic, LinearSolverKind::direct, LinearSolverKind::pcg})

@@ -21,7 +21,7 @@
 #include <omp.h>
 
 #include "solver/forces/element_kernels3.hpp"
-#include "solver/forces/internal_forces3.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/materials/stress3.hpp"
 #include "solver/schemes/threads.hpp"
 #include "tests/meshes3.hpp"
@@ -45,7 +45,7 @@ constexpr double kLaneTol = 0.0, kLawTol = 0.0;
 constexpr double kLaneTol = 1e-13, kLawTol = 1e-14;
 #endif
 
-Model3 model_of(Kind kind, const Law& law, const Mesh3& mesh) { return build_model3({body_of(kind, mesh, law.m)}, Vec3::Zero()); }
+Model<3> model_of(Kind kind, const Law& law, const Mesh3& mesh) { return build_model({body_of(kind, mesh, law.m)}, Vec3::Zero()); }
 
 struct Reference {
   Eigen::VectorXd f;
@@ -55,7 +55,7 @@ struct Reference {
 
 // element3d.hpp's kernels cell by cell (the geometry of cell_geometry(), the kernels' own Eigen
 // arithmetic), assembled in cell order.
-Reference element3d_forces(const Model3& model, const double* u, const double* v) {
+Reference element3d_forces(const Model<3>& model, const double* u, const double* v) {
   Reference r;
   r.f = Eigen::VectorXd::Zero(model.num_dofs());
   auto add = [&](const auto& conn, const auto& fe, const ElementTotals3& t) {
@@ -91,7 +91,7 @@ Reference element3d_forces(const Model3& model, const double* u, const double* v
 // The pass's arithmetic one cell at a time, written out here: the kernels' functions of
 // element_kernels3.hpp with stride 1 on the cell's own arrays, the scalar laws of material3d.hpp
 // (mat.first_piola) and Eigen's determinant, the sums in cell order.
-Reference one_cell_forces(const Model3& model, const double* u, const double* v) {
+Reference one_cell_forces(const Model<3>& model, const double* u, const double* v) {
   Reference r;
   r.f = Eigen::VectorXd::Zero(model.num_dofs());
   auto scatter = [&](const auto& conn, const double* fe) {
@@ -185,7 +185,7 @@ TEST(InternalForces3, OneCellModelEqualsTheElementKernel) {
           for (int a = 0; a < 4; ++a) cell.nodes.col(a) = six.nodes.col(six.tets[seed % 6][a]);
           cell.tets = {{0, 1, 2, 3}};
         }
-        const Model3 model = model_of(kind, law, cell);
+        const Model<3> model = model_of(kind, law, cell);
         ASSERT_EQ(model.num_cells(), 1);
         const double size = std::cbrt(std::abs(is_tet(kind) ? signed_volume(cell, cell.tets[0]) : signed_volume(cell, cell.hexes[0])));
         const Eigen::VectorXd u = random_field(model.num_dofs(), 0.05 * size, seed);
@@ -228,7 +228,7 @@ TEST(InternalForces3, AssembledForcesEqualTheElementKernels) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 21));
+      const Model<3> model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 21));
       const Eigen::VectorXd u = smooth_field(model, 0.05), v = smooth_field(model, 3.0);
       const Reference ref = element3d_forces(model, u.data(), v.data());
       Eigen::VectorXd f(model.num_dofs());
@@ -252,7 +252,7 @@ TEST(InternalForces3, LanesEqualTheOneCellArithmetic) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 31));
+      const Model<3> model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 31));
       ASSERT_NE(model.num_cells() % kLanes, 0);
       const Eigen::VectorXd u = smooth_field(model, 0.05), v = smooth_field(model, 3.0);
       const Reference ref = one_cell_forces(model, u.data(), v.data());
@@ -318,7 +318,7 @@ TEST(InternalForces3, RigidMotionGivesNoForceAndNoEnergy) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = model_of(kind, law, distorted_box(3, 2, 2, is_tet(kind), 0.15, 41));
+      const Model<3> model = model_of(kind, law, distorted_box(3, 2, 2, is_tet(kind), 0.15, 41));
       Eigen::VectorXd u(model.num_dofs()), v(model.num_dofs());
       for (int p = 0; p < model.num_nodes(); ++p) {
         const Vec3 x = model.ref.col(p);
@@ -356,7 +356,7 @@ TEST(InternalForces3, PatchTestInteriorForcesVanish) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = model_of(kind, law, distorted_box(3, 3, 3, is_tet(kind), 0.15, 51));
+      const Model<3> model = model_of(kind, law, distorted_box(3, 3, 3, is_tet(kind), 0.15, 51));
       Eigen::VectorXd u(model.num_dofs()), v(model.num_dofs());
       for (int p = 0; p < model.num_nodes(); ++p) {
         const Vec3 x = model.ref.col(p);
@@ -399,7 +399,7 @@ TEST(InternalForces3, ForcesAreTheEnergyGradient) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = model_of(kind, law, distorted_box(2, 1, 1, is_tet(kind), 0.15, 61));
+      const Model<3> model = model_of(kind, law, distorted_box(2, 1, 1, is_tet(kind), 0.15, 61));
       const Eigen::VectorXd u0 = random_field(model.num_dofs(), 0.05 * 0.4, 62);
       const Eigen::VectorXd v = Eigen::VectorXd::Zero(model.num_dofs());
       Eigen::VectorXd f(model.num_dofs()), scratch(model.num_dofs());
@@ -430,7 +430,7 @@ TEST(InternalForces3, ThreadedPassIsBitIdenticalForOneAndTwoThreads) {
   for (const Kind kind : kAllKinds) {
     SCOPED_TRACE(kind_name(kind));
     const Law law = all_laws()[1];
-    const Model3 model = is_tet(kind) ? model_of(kind, law, distorted_box(6, 6, 5, true, 0.1, 71))
+    const Model<3> model = is_tet(kind) ? model_of(kind, law, distorted_box(6, 6, 5, true, 0.1, 71))
                                       : model_of(kind, law, distorted_box(11, 10, 10, false, 0.1, 71));
     ForceScratch scratch = make_force_scratch(model);
     ASSERT_GE(scratch.chunks.size(), kForceParallelChunks);
@@ -484,7 +484,7 @@ TEST(InternalForces3, StressTrackingEqualsTheSeparatePasses) {
     for (const Law& law : all_laws())
       for (const StressMeasure measure : {StressMeasure::cauchy, StressMeasure::pk2, StressMeasure::kirchhoff}) {
         SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name + ", " + stress_measure_name(measure));
-        const Model3 model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 81));
+        const Model<3> model = model_of(kind, law, distorted_box(3, 3, 2, is_tet(kind), 0.15, 81));
         const Eigen::VectorXd u = smooth_field(model, 0.05), v = smooth_field(model, 3.0);
         std::vector<std::uint8_t> contact(model.num_cells(), 0);
         for (std::size_t c = 0; c < contact.size(); c += 4) contact[c] = 1;
@@ -590,7 +590,7 @@ TEST(InternalForces3, CellStressesOfAHomogeneousDeformation) {
   for (const Kind kind : kAllKinds) {
     SCOPED_TRACE(kind_name(kind));
     const Law law = all_laws()[1];
-    const Model3 model = model_of(kind, law, distorted_box(2, 2, 2, is_tet(kind), 0.15, 91));
+    const Model<3> model = model_of(kind, law, distorted_box(2, 2, 2, is_tet(kind), 0.15, 91));
     Eigen::VectorXd u(model.num_dofs());
     for (int p = 0; p < model.num_nodes(); ++p) u.segment<3>(3 * p) = (F0 - Mat3::Identity()) * model.ref.col(p);
     const Mat3 P0 = std::visit([&](const auto& m) { return m.first_piola(F0); }, law.m);
@@ -628,7 +628,7 @@ TEST(InternalForces3, ForcePassDoesNotAllocate) {
   for (const Kind kind : kAllKinds)
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
-      const Model3 model = is_tet(kind) ? model_of(kind, law, distorted_box(4, 4, 4, true, 0.1, 101))
+      const Model<3> model = is_tet(kind) ? model_of(kind, law, distorted_box(4, 4, 4, true, 0.1, 101))
                                         : model_of(kind, law, distorted_box(11, 10, 10, false, 0.1, 101));
       ForceScratch scratch = make_force_scratch(model);
       const Eigen::VectorXd u = smooth_field(model, 0.02), v = smooth_field(model, 3.0);

@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "solver/model/model.hpp"
-#include "solver/model/model3.hpp"
 #include "tests/meshes3.hpp"
 
 namespace ricochet {
@@ -24,25 +23,25 @@ using namespace test3;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // Three bodies: one-point hexahedra, tetrahedra, 2x2x2 hexahedra.
-std::vector<BodyInput3> three_bodies() {
+std::vector<BodyInput<3>> three_bodies() {
   const std::vector<Law> laws = all_laws();
-  std::vector<BodyInput3> in;
+  std::vector<BodyInput<3>> in;
   in.push_back(body_of(Kind::hex8_viscous, distorted_box(3, 2, 2, false, 0.1, 1), laws[0].m, "a"));
   in.push_back(body_of(Kind::tet4, distorted_box(2, 1, 2, true, 0.1, 2), laws[1].m, "b"));
   in.push_back(body_of(Kind::hex8, distorted_box(2, 2, 3, false, 0.1, 3), laws[3].m, "c"));
   in[0].initial_velocity = Vec3(1.0, -2.0, 3.0);
   in[1].initial_velocity = Vec3(-0.5, 0.0, 0.25);
-  for (BodyInput3& b : in) b.mesh.nodes.row(0).array() += 3.0 * (&b - in.data());  // bodies apart
+  for (BodyInput<3>& b : in) b.mesh.nodes.row(0).array() += 3.0 * (&b - in.data());  // bodies apart
   return in;
 }
 
 TEST(Model3, ShapeAndNumbering) {
-  static_assert(Model3::kDim == 3 && Model::kDim == 2);
-  const std::vector<BodyInput3> in = three_bodies();
+  static_assert(Model<3>::kDim == 3 && Model<2>::kDim == 2);
+  const std::vector<BodyInput<3>> in = three_bodies();
   const Vec3 gravity(0.0, -9.81, 1.0);
-  const Model3 model = build_model3(in, gravity);
+  const Model<3> model = build_model(in, gravity);
   int nodes = 0, cells = 0;
-  for (const BodyInput3& b : in) {
+  for (const BodyInput<3>& b : in) {
     nodes += b.mesh.num_nodes();
     cells += b.mesh.num_cells();
   }
@@ -60,7 +59,7 @@ TEST(Model3, ShapeAndNumbering) {
   int node0 = 0, cell0 = 0;
   for (std::size_t bi = 0; bi < in.size(); ++bi) {
     const Mesh3& m = in[bi].mesh;
-    const BodyInfo3& info = model.bodies[bi];
+    const BodyInfo<3>& info = model.bodies[bi];
     SCOPED_TRACE(info.name);
     EXPECT_EQ(info.name, in[bi].name);
     EXPECT_EQ(info.first_node, node0);
@@ -122,7 +121,7 @@ TEST(Model3, MassesSumToDensityTimesVolume) {
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
       const Mesh3 mesh = distorted_box(3, 3, 2, is_tet(kind), 0.15, 11);
-      const Model3 model = build_model3({body_of(kind, mesh, law.m)}, Vec3::Zero());
+      const Model<3> model = build_model({body_of(kind, mesh, law.m)}, Vec3::Zero());
       const double rho = material_density(law.m);
       Eigen::VectorXd expected = Eigen::VectorXd::Zero(model.num_nodes());
       double volume = 0.0;
@@ -166,7 +165,7 @@ TEST(Model3, CellDtIsTheKernelsCriticalLength) {
     for (const Law& law : all_laws()) {
       SCOPED_TRACE(std::string(kind_name(kind)) + ", " + law.name);
       const Mesh3 mesh = distorted_box(2, 3, 2, is_tet(kind), 0.15, 5);
-      const Model3 model = build_model3({body_of(kind, mesh, law.m)}, Vec3::Zero());
+      const Model<3> model = build_model({body_of(kind, mesh, law.m)}, Vec3::Zero());
       const double cp = material_wave_speed(law.m);
       ASSERT_EQ(model.num_cells(), mesh.num_cells());
       int c = 0;
@@ -197,7 +196,7 @@ TEST(Model3, LaneGeometryIsTheBuildersGeometry) {
   for (const Kind kind : kAllKinds) {
     SCOPED_TRACE(kind_name(kind));
     const Mesh3 mesh = distorted_box(3, 2, 2, is_tet(kind), 0.15, 9);
-    const Model3 model = build_model3({body_of(kind, mesh, law.m)}, Vec3::Zero());
+    const Model<3> model = build_model({body_of(kind, mesh, law.m)}, Vec3::Zero());
     if (kind == Kind::hex8) {
       const Hex8Block& b = model.hex8_full[0];
       for (std::size_t e = 0; e < b.conn.size(); ++e) {
@@ -266,13 +265,13 @@ TEST(Model3, LaneGeometryIsTheBuildersGeometry) {
   EXPECT_LE(worst_b, 1e-15);
 }
 
-// The cells build_model3 rejects: the message names the body and the cell (its index in the
+// The cells build_model rejects: the message names the body and the cell (its index in the
 // body's mesh, hexahedra then tetrahedra).
 TEST(Model3, BadCellsAreRejectedNamingBodyAndCell) {
   const Law law = all_laws()[0];
-  auto message = [&](const std::vector<BodyInput3>& in) -> std::string {
+  auto message = [&](const std::vector<BodyInput<3>>& in) -> std::string {
     try {
-      build_model3(in, Vec3::Zero());
+      build_model(in, Vec3::Zero());
     } catch (const std::invalid_argument& e) {
       return e.what();
     }
@@ -281,7 +280,7 @@ TEST(Model3, BadCellsAreRejectedNamingBodyAndCell) {
   for (const Kind kind : {Kind::hex8, Kind::hex8_viscous}) {
     SCOPED_TRACE(kind_name(kind));
     // The second body's cell 3 turned inside out (its two layers swapped).
-    std::vector<BodyInput3> in = {body_of(kind, distorted_box(2, 2, 1, false, 0.1, 1), law.m, "first"),
+    std::vector<BodyInput<3>> in = {body_of(kind, distorted_box(2, 2, 1, false, 0.1, 1), law.m, "first"),
                                   body_of(kind, distorted_box(2, 2, 2, false, 0.1, 2), law.m, "second")};
     auto& h = in[1].mesh.hexes[3];
     std::swap_ranges(h.begin(), h.begin() + 4, h.begin() + 4);
@@ -289,7 +288,7 @@ TEST(Model3, BadCellsAreRejectedNamingBodyAndCell) {
     EXPECT_NE(what.find("body 'second' cell 3"), std::string::npos) << what;
     EXPECT_NE(what.find("corner quality"), std::string::npos) << what;
     // A hexahedron folded at one corner (hex_corner_quality() <= 0).
-    BodyInput3 folded = body_of(kind, Mesh3{}, law.m, "folded");
+    BodyInput<3> folded = body_of(kind, Mesh3{}, law.m, "folded");
     folded.mesh.nodes.resize(3, 8);
     folded.mesh.nodes << 0, 1, 1, 0, 0, 1, 1, 0,  //
         0, 0, 1, 1, 0, 0, 1, 1,                   //
@@ -302,18 +301,18 @@ TEST(Model3, BadCellsAreRejectedNamingBodyAndCell) {
   }
   // A tetrahedron with two corners swapped: cell index after the body's hexahedra (none here, 6
   // tetrahedra a box cell: cell 7 is the second cell's second tetrahedron).
-  std::vector<BodyInput3> in = {body_of(Kind::tet4, distorted_box(2, 1, 1, true, 0.1, 4), law.m, "tets")};
+  std::vector<BodyInput<3>> in = {body_of(Kind::tet4, distorted_box(2, 1, 1, true, 0.1, 4), law.m, "tets")};
   std::swap(in[0].mesh.tets[7][0], in[0].mesh.tets[7][1]);
   std::string what = message(in);
   EXPECT_NE(what.find("body 'tets' cell 7"), std::string::npos) << what;
   EXPECT_NE(what.find("volume"), std::string::npos) << what;
   // Density, and a node of no cell.
-  BodyInput3 light = body_of(Kind::hex8, distorted_box(1, 1, 1, false, 0.0), StVenantKirchhoff3::make(1e6, 0.3, 0.0),
+  BodyInput<3> light = body_of(Kind::hex8, distorted_box(1, 1, 1, false, 0.0), StVenantKirchhoff3::make(1e6, 0.3, 0.0),
                              "light");
   what = message({light});
   EXPECT_NE(what.find("body 'light'"), std::string::npos) << what;
   EXPECT_NE(what.find("density"), std::string::npos) << what;
-  BodyInput3 extra = body_of(Kind::hex8, distorted_box(1, 1, 1, false, 0.0), law.m, "extra");
+  BodyInput<3> extra = body_of(Kind::hex8, distorted_box(1, 1, 1, false, 0.0), law.m, "extra");
   extra.mesh.nodes.conservativeResize(3, 9);
   extra.mesh.nodes.col(8) = Vec3(5.0, 5.0, 5.0);
   what = message({extra});

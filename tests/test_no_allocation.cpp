@@ -121,7 +121,7 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
   }
   for (const StepCase& c : cases) {
     const Mesh mesh = verification::grid_mesh(2.0, 0.5, 8, 2, 0.2, c.kind);
-    Model model = verification::single_body_model(mesh, c.material, c.plane, c.kind, 0.01, 0.1,
+    Model<2> model = verification::single_body_model(mesh, c.material, c.plane, c.kind, 0.01, 0.1,
                                                   Vec2(0.0, -9.81));
     for (int i = 0; i < model.num_nodes(); ++i)
       model.initial_velocity[2 * i + 1] = std::sin(3.0 * model.ref(0, i));
@@ -187,7 +187,7 @@ TEST(NoAllocation, ExplicitStepsDoNotAllocate) {
 // friction, a held node and a load; after the set-up no step allocates.
 TEST(NoAllocation, RelaxationStepsDoNotAllocate) {
   const Mesh mesh = verification::grid_mesh(0.1, 0.05, 10, 5, 0.0, false);
-  const Model model = verification::single_body_model(
+  const Model<2> model = verification::single_body_model(
       mesh, StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress), PlaneMode::stress,
       ElementKind::q4_full, 0.05, 0.1, Vec2(0.0, -9.81));
   RunSettings settings;
@@ -225,7 +225,7 @@ TEST(NoAllocation, VariableStepsDoNotAllocate) {
   for (ElementKind kind : verification::all_element_kinds()) {
     Mesh mesh = verification::grid_mesh(0.04, 0.02, 8, 4, 0.2, kind);
     mesh.nodes.row(1).array() += 1e-5;
-    Model model = verification::single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain),
+    Model<2> model = verification::single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain),
                                                   PlaneMode::strain, kind, 0.01, 0.1, Vec2(0.0, -9.81));
     for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity.segment<2>(2 * i) = Vec2(1.0, -5.0);
     const std::vector<Obstacle> line{{"ground", Vec2::Zero(), Vec2::UnitY()}};
@@ -276,7 +276,7 @@ TEST(NoAllocation, VariableStepsDoNotAllocate) {
 // variable step's threaded recomputation included.
 TEST(NoAllocation, ThreadedForcePassDoesNotAllocate) {
   const Mesh mesh = verification::grid_mesh(2.0, 1.0, 48, 24, 0.2, ElementKind::q4_full);
-  const Model model = verification::single_body_model(
+  const Model<2> model = verification::single_body_model(
       mesh, StVenantKirchhoff::make(200e9, 0.3, 7800.0, PlaneMode::stress), PlaneMode::stress, ElementKind::q4_full, 0.01);
   ASSERT_GE(model.num_cells(), static_cast<int>(kForceParallelChunks * kForceChunkCells));
   const ThreadScope threads(2);
@@ -326,9 +326,9 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
   };
   const Material3 m = NeoHookean3::make(1e7, 0.3, 1000.0);
   for (test3::Kind kind : {test3::Kind::hex8, test3::Kind::hex8_viscous, test3::Kind::tet4}) {
-    BodyInput3 b = test3::body_of(kind, test3::distorted_box(3, 2, 2, test3::is_tet(kind), 0.1), m);
+    BodyInput<3> b = test3::body_of(kind, test3::distorted_box(3, 2, 2, test3::is_tet(kind), 0.1), m);
     b.initial_velocity = Vec3(3.0, -5.0, 1.0);
-    const Model3 model = build_model3({b}, Vec3::Zero());
+    const Model<3> model = build_model({b}, Vec3::Zero());
     const double low = model.ref.row(1).minCoeff();
     for (const Config& config : {Config{LinearSolverKind::pcg, 0.5, "pcg"}, Config{LinearSolverKind::direct, 0.5, "direct"},
                                  Config{LinearSolverKind::direct, 0.0, "direct, full Newton"}})
@@ -341,7 +341,7 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
         ImplicitSettings im;
         im.linear_solver = config.solver;
         im.refactor_contraction = config.refactor_contraction;
-        ImplicitIntegratorT<Model3> integrator(model, s, im);
+        ImplicitIntegratorT<Model<3>> integrator(model, s, im);
         for (int n = 0; n < 3; ++n) ASSERT_TRUE(integrator.step(false)) << integrator.failure();  // warm up
         const long before = g_allocations.load();
         int active = 0;

@@ -152,7 +152,7 @@ Drop drop(Scheme scheme, const Obstacle& ob, double y0, double mu, double end_ti
   Mesh mesh = grid_mesh(0.02, 0.01, 4, 2, 0.0, false);
   mesh.nodes.row(1).array() += y0;
   const Material mat = StVenantKirchhoff::make(1e7, 0.3, 1000.0, PlaneMode::stress);
-  Model model = single_body_model(mesh, mat, PlaneMode::stress, ElementKind::q4_full, 0.01, 0.1,
+  Model<2> model = single_body_model(mesh, mat, PlaneMode::stress, ElementKind::q4_full, 0.01, 0.1,
                                   Vec2(0.0, -100.0));
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i + 1] = -0.2;
   RunSettings set;

@@ -60,7 +60,7 @@ TEST(PenaltyStiffness, RectangularCellsByHand) {
   const double f = 0.3;
   const Mesh mesh = grid_mesh(0.04, 0.01, 2, 1, 0.0, false);
   for (ElementKind kind : {ElementKind::q4_full, ElementKind::q4_viscous}) {
-    const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, kind, kThick);
+    const Model<2> model = single_body_model(mesh, stiff_material(), PlaneMode::stress, kind, kThick);
     const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
     const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
     ASSERT_EQ(p.set.candidates.size(), 6u) << "all six nodes are boundary nodes";
@@ -94,7 +94,7 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   tri.nodes.resize(2, 3);
   tri.nodes << 0.0, a, 0.0, 0.0, 0.0, b;
   tri.tris.push_back({0, 1, 2});
-  const Model model = single_body_model(tri, stiff_material(), PlaneMode::stress, ElementKind::t3, kThick);
+  const Model<2> model = single_body_model(tri, stiff_material(), PlaneMode::stress, ElementKind::t3, kThick);
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
   ASSERT_EQ(p.set.candidates.size(), 3u);
@@ -106,7 +106,7 @@ TEST(PenaltyStiffness, TriangleAndUniformGridByHand) {
   // stiffness scales linearly with f_si. Interior nodes and nodes with a prescribed DOF are no
   // candidates; two obstacles double the candidates.
   const Mesh grid = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
-  const Model gm = single_body_model(grid, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
+  const Model<2> gm = single_body_model(grid, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
   const std::vector<Obstacle> two{{"ground", Vec2::Zero(), Vec2::UnitY()},
                                       {"wall", Vec2::Zero(), Vec2::UnitX()}};
   const std::vector<PrescribedDof> held{{2 * 24 + 1, PrescribedDof::Kind::velocity, 0.0, 0.0}};
@@ -132,7 +132,7 @@ TEST(PenaltyStiffness, SoftConstraintByHand) {
   // A soft material (E = 1 MPa): f_si K e = 0.1 x 0.83 MPa x 0.01 m = 833 N/m at most, far below
   // k1 = 0.1 x 5e-4 / (2e-10) = 2.5e5 N/m: k1 everywhere, and every spring's own limit is
   // 2 sqrt(m / k1) = 2 dt sqrt(2 / SOFSCL), whatever the node's mass.
-  const Model soft = single_body_model(mesh, StVenantKirchhoff::make(1e6, kNu, kRho, PlaneMode::stress),
+  const Model<2> soft = single_body_model(mesh, StVenantKirchhoff::make(1e6, kNu, kRho, PlaneMode::stress),
                                        PlaneMode::stress, ElementKind::q4_full, kThick);
   const PenaltyContact p = make_penalty_contact(soft, ground, {{0.0}}, {}, {0.1, scale, dt});
   for (std::size_t c = 0; c < p.set.candidates.size(); ++c) {
@@ -143,7 +143,7 @@ TEST(PenaltyStiffness, SoftConstraintByHand) {
   EXPECT_NEAR(penalty_critical_dt(soft, p), 2.0 * dt * std::sqrt(2.0 / scale), 1e-12 * dt);
   // The stiff material of the other tests: its bulk springs (1.25-2 f K e = 1e6-1.7e6 N/m at
   // f_si 0.3) exceed k1 = 2.5e5-5e5 N/m, so SOFT = 1 changes nothing.
-  const Model stiff = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
+  const Model<2> stiff = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
   const PenaltyContact plain = make_penalty_contact(stiff, ground, {{0.0}}, {}, {0.3});
   const PenaltyContact with_soft = make_penalty_contact(stiff, ground, {{0.0}}, {}, {0.3, scale, dt});
   for (std::size_t c = 0; c < plain.set.candidates.size(); ++c) EXPECT_EQ(with_soft.stiffness[c], plain.stiffness[c]);
@@ -180,7 +180,7 @@ struct RunOutput {
 };
 
 struct PenaltyImpact {
-  Model model;
+  Model<2> model;
   std::vector<Obstacle> obstacles{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   double mu = 0.0;
   double f_si = 0.1;
@@ -420,7 +420,7 @@ TEST(PenaltyTimeStep, StableAtNinetyPercentOfTheMinimumDivergesOnTheElementStepA
 // 4 ms divided by its largest value over the first 0.2 ms (infinity if the run diverged).
 double resting_energy_growth(double f_si, double dt) {
   Mesh mesh = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
-  const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress,
+  const Model<2> model = single_body_model(mesh, stiff_material(), PlaneMode::stress,
                                         ElementKind::q4_full, kThick, 0.1, Vec2(0.0, -1000.0));
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f_si});
@@ -453,7 +453,7 @@ TEST(PenaltyTimeStep, MinimumOfTheTwoLimitsIsNoBoundTheCombinedStepIs) {
   // the energy, 0.9 x combined = 0.66 x min keeps it to 1 %.)
   const double f = 3.0;
   Mesh mesh = grid_mesh(0.01, 0.01, 4, 4, 0.0, false);
-  const Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
+  const Model<2> model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full, kThick);
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   const PenaltyContact p = make_penalty_contact(model, ground, {{0.0}}, {}, {f});
   const double dt_min = std::min(model.critical_dt, penalty_critical_dt(model, p));
@@ -607,7 +607,7 @@ TEST(PenaltyFriction, SlowBlockSticksAndStaysInsideTheCone) {
   // rest; E = kinetic + strain + stored + D - W_gravity is conserved.
   const double mu = 0.5, g = 1000.0, v0 = 0.05;
   Mesh mesh = grid_mesh(0.02, 0.01, 4, 2, 0.0, false);
-  Model model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full,
+  Model<2> model = single_body_model(mesh, stiff_material(), PlaneMode::stress, ElementKind::q4_full,
                                   kThick, 0.1, Vec2(0.0, -g));
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i] = v0;
   const std::vector<Obstacle> ground{{"ground", Vec2::Zero(), Vec2::UnitY()}};

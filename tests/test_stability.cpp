@@ -82,7 +82,7 @@ class StabilityTest : public ::testing::Test {
 // The exact linear stability limit of central differences: 2 / omega_max, with omega_max^2 the
 // largest eigenvalue of M^-1/2 K M^-1/2 on the free DOFs (K the tangent at the reference state).
 double true_critical_dt(const PreparedCase& pc) {
-  const Model& m = pc.model;
+  const Model<2>& m = pc.model;
   const int n = m.num_dofs();
   SystemMatrix sys = make_system_matrix(m);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);

@@ -152,7 +152,7 @@ TEST(StressPeaks, VonMisesMaxIndependentOfOutputInterval) {
 TEST(StressPeaks, ForcePassMatchesStressPass) {
   const PlateRun run = plate({"time.end=6e-4", "output.fields=[6e-4]"});
   ASSERT_EQ(run.result.fields.size(), 1u);
-  const Model& model = run.prepared.model;
+  const Model<2>& model = run.prepared.model;
   const Eigen::VectorXd& u = run.result.fields[0].u;
   std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
   for (int c = 0; c < model.num_cells(); c += 3) contact_cell[c] = 1;
@@ -193,7 +193,7 @@ TEST(StressPeaks, SampleInTheForcePassEqualsTheSeparatePasses) {
   auto near = [](double a, double b) { return std::abs(a - b) <= 1e-13 * std::max(std::abs(a), std::abs(b)); };
   for (const Material& material : materials)
     for (const ElementKind kind : all_element_kinds()) {
-      const Model model = single_body_model(grid_mesh(1.0, 0.8, 5, 4, 0.2, kind), material,
+      const Model<2> model = single_body_model(grid_mesh(1.0, 0.8, 5, 4, 0.2, kind), material,
                                             std::visit([](const auto& m) { return m.plane; }, material), kind);
       Eigen::VectorXd u(model.num_dofs()), v(model.num_dofs());
       for (int i = 0; i < model.num_dofs(); ++i) {

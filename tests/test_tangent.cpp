@@ -179,14 +179,14 @@ Eigen::VectorXd random_field(int size, double amplitude, unsigned seed) {
   return a;
 }
 
-Eigen::VectorXd forces(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+Eigen::VectorXd forces(const Model<2>& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
   Eigen::VectorXd f(model.num_dofs());
   internal_forces(model, u.data(), v.data(), f.data(), false);
   return f;
 }
 
 // Central-difference Jacobian of internal_forces with respect to u (wrt_v = false) or v.
-Eigen::MatrixXd fd_jacobian(const Model& model, const Eigen::VectorXd& u,
+Eigen::MatrixXd fd_jacobian(const Model<2>& model, const Eigen::VectorXd& u,
                             const Eigen::VectorXd& v, bool wrt_v, double h) {
   const int n = model.num_dofs();
   Eigen::MatrixXd j(n, n);
@@ -204,7 +204,7 @@ Eigen::MatrixXd fd_jacobian(const Model& model, const Eigen::VectorXd& u,
   return j;
 }
 
-Eigen::MatrixXd assembled(const Model& model, SystemMatrix& s, const Eigen::VectorXd& u,
+Eigen::MatrixXd assembled(const Model<2>& model, SystemMatrix& s, const Eigen::VectorXd& u,
                           const Eigen::VectorXd& v, double ms, double ks, double cs) {
   Eigen::VectorXd f(model.num_dofs());
   assemble_system(model, u.data(), v.data(), ms, ks, cs, s, f.data(), false);
@@ -225,7 +225,7 @@ TEST(Tangent, StiffnessAndDampingMatchFiniteDifferenceJacobians) {
   const double h = 1e-7;
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds()) {
-      const Model model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
+      const Model<2> model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
                                             kThickness);
       const int n = model.num_dofs();
       const Eigen::VectorXd u = random_field(n, 0.04, 42);
@@ -255,15 +255,15 @@ TEST(Tangent, StiffnessAndDampingMatchFiniteDifferenceJacobians) {
 // Two bodies: a Q4 one-point stiffness-HG body and a body whose mesh mixes quads and triangles
 // (a Q4 2x2 block and a T3 block sharing nodes), so the matrix has three blocks of different
 // formulations and materials.
-Model mixed_model() {
-  BodyInput a;
+Model<2> mixed_model() {
+  BodyInput<2> a;
   a.name = "hourglass";
   a.mesh = grid_mesh(1.0, 0.8, 3, 2, 0.2, false);
   a.material = NeoHookean::make(kYoung, kPoisson, kDensity, PlaneMode::stress);
   a.quad_element = QuadElement::one_point_hourglass;
   a.hourglass.form = HourglassForm::stiffness;
   a.thickness = kThickness;
-  BodyInput b;
+  BodyInput<2> b;
   b.name = "mixed";
   Mesh quads = grid_mesh(1.0, 0.8, 3, 2, 0.2, false);
   const Mesh tris = grid_mesh(1.0, 0.8, 3, 2, 0.2, true);
@@ -278,7 +278,7 @@ Model mixed_model() {
 }
 
 TEST(Tangent, MixedBlocksMatchFiniteDifferenceJacobian) {
-  const Model model = mixed_model();
+  const Model<2> model = mixed_model();
   ASSERT_EQ(model.q4_full.size(), 1u);
   ASSERT_EQ(model.q4_hourglass.size(), 1u);
   ASSERT_EQ(model.t3.size(), 1u);
@@ -295,7 +295,7 @@ TEST(Tangent, MixedBlocksMatchFiniteDifferenceJacobian) {
 TEST(Tangent, ScalesCombineLinearlyAndMatrixIsSymmetric) {
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds()) {
-      const Model model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
+      const Model<2> model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
                                             kThickness);
       const int n = model.num_dofs();
       const Eigen::VectorXd u = random_field(n, 0.04, 11);
@@ -323,7 +323,7 @@ TEST(Tangent, ForcesAndTotalsEqualInternalForces) {
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds())
       for (bool with_energy : {false, true}) {
-        const Model model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
+        const Model<2> model = single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
                                               kThickness);
         const int n = model.num_dofs();
         const Eigen::VectorXd u = random_field(n, 0.04, 21);
@@ -384,12 +384,12 @@ void check_slots(const Block& b, const SystemMatrix& s, std::size_t& offset) {
 }
 
 TEST(Tangent, PatternHasExactlyTheElementCouplings) {
-  std::vector<Model> models;
+  std::vector<Model<2>> models;
   for (ElementKind kind : all_element_kinds())
     models.push_back(single_body_model(distorted_mesh(kind), material_cases()[0].material,
                                        PlaneMode::stress, kind, kThickness));
   models.push_back(mixed_model());
-  for (const Model& model : models) {
+  for (const Model<2>& model : models) {
     const SystemMatrix s = make_system_matrix(model);
     std::set<Coupling> expected;
     for (const auto& b : model.q4_full) expected_couplings(b, expected);
@@ -434,13 +434,13 @@ TEST(Tangent, AssemblyDoesNotAllocate) {
   delete p;
   EXPECT_GE(g_allocations.load() - before, 1) << "operator new";
 
-  std::vector<Model> models;
+  std::vector<Model<2>> models;
   for (const MaterialCase& mc : material_cases())
     for (ElementKind kind : all_element_kinds())
       models.push_back(single_body_model(distorted_mesh(kind), mc.material, mc.plane, kind,
                                          kThickness));
   models.push_back(mixed_model());
-  for (const Model& model : models) {
+  for (const Model<2>& model : models) {
     const int n = model.num_dofs();
     const Eigen::VectorXd u = random_field(n, 0.04, 31);
     const Eigen::VectorXd v = random_field(n, 3.0, 32);

@@ -1,7 +1,7 @@
 // The implicit scheme's iteration matrix for a 3D model (tangent.hpp, tangent3.cpp):
 // A = m_scale M + k_scale K_T + c_scale C with K_T = d f_int / du and C = d f_int / dv of the 3D
 // force pass, for the four laws and every element formulation, against central-difference
-// Jacobians of internal_forces(const Model3&, ...); the mass term, symmetry and the pattern.
+// Jacobians of internal_forces(const Model<3>&, ...); the mass term, symmetry and the pattern.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -14,14 +14,14 @@ namespace {
 
 using test3::Kind;
 
-Eigen::VectorXd forces(const Model3& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+Eigen::VectorXd forces(const Model<3>& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
   Eigen::VectorXd f(model.num_dofs());
   internal_forces(model, u.data(), v.data(), f.data(), false);
   return f;
 }
 
 // Central-difference Jacobian of the 3D force pass with respect to u (wrt_v = false) or v.
-Eigen::MatrixXd fd_jacobian(const Model3& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v, bool wrt_v,
+Eigen::MatrixXd fd_jacobian(const Model<3>& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v, bool wrt_v,
                             double h) {
   const int n = model.num_dofs();
   Eigen::MatrixXd j(n, n);
@@ -34,15 +34,15 @@ Eigen::MatrixXd fd_jacobian(const Model3& model, const Eigen::VectorXd& u, const
   return j;
 }
 
-Eigen::MatrixXd assembled(const Model3& model, SystemMatrix& s, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+Eigen::MatrixXd assembled(const Model<3>& model, SystemMatrix& s, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                           double ms, double ks, double cs) {
   Eigen::VectorXd f(model.num_dofs());
   assemble_system(model, u.data(), v.data(), ms, ks, cs, s, f.data(), false);
   return Eigen::MatrixXd(s.matrix);
 }
 
-Model3 box_model(Kind kind, const Material3& m) {
-  return build_model3({test3::body_of(kind, test3::distorted_box(2, 2, 1, test3::is_tet(kind), 0.1), m)},
+Model<3> box_model(Kind kind, const Material3& m) {
+  return build_model({test3::body_of(kind, test3::distorted_box(2, 2, 1, test3::is_tet(kind), 0.1), m)},
                       Vec3::Zero());
 }
 
@@ -54,7 +54,7 @@ TEST(Tangent3, StiffnessAndDampingMatchFiniteDifferenceJacobians) {
   for (const test3::Law& law : test3::all_laws())
     for (Kind kind : test3::kAllKinds) {
       SCOPED_TRACE(law.name + ", " + test3::kind_name(kind));
-      const Model3 model = box_model(kind, law.m);
+      const Model<3> model = box_model(kind, law.m);
       const Eigen::VectorXd u = test3::smooth_field(model, 0.05) + test3::random_field(model.num_dofs(), 0.01, 3);
       const Eigen::VectorXd v = test3::random_field(model.num_dofs(), 3.0, 4);
       SystemMatrix s = make_system_matrix(model);
@@ -83,7 +83,7 @@ TEST(Tangent3, StiffnessAndDampingMatchFiniteDifferenceJacobians) {
 
 // m_scale M is the lumped mass on the diagonal and nothing else; the three scales add linearly.
 TEST(Tangent3, ScalesCombineLinearly) {
-  const Model3 model = box_model(Kind::hex8_viscous, test3::all_laws()[1].m);
+  const Model<3> model = box_model(Kind::hex8_viscous, test3::all_laws()[1].m);
   const Eigen::VectorXd u = test3::smooth_field(model, 0.05), v = test3::random_field(model.num_dofs(), 2.0, 9);
   SystemMatrix s = make_system_matrix(model);
   const Eigen::MatrixXd m = assembled(model, s, u, v, 1.0, 0.0, 0.0);
@@ -97,10 +97,10 @@ TEST(Tangent3, ScalesCombineLinearly) {
 // The pattern holds exactly the couplings of nodes that share a cell (and the diagonal), in
 // 3 x 3 blocks; two bodies, one of hexahedra and one of tetrahedra, are not coupled.
 TEST(Tangent3, PatternHasExactlyTheCellCouplings) {
-  BodyInput3 a = test3::body_of(Kind::hex8, test3::distorted_box(2, 1, 1, false, 0.1), test3::all_laws()[0].m, "a");
-  BodyInput3 b = test3::body_of(Kind::tet4, test3::distorted_box(1, 1, 1, true, 0.1), test3::all_laws()[0].m, "b");
+  BodyInput<3> a = test3::body_of(Kind::hex8, test3::distorted_box(2, 1, 1, false, 0.1), test3::all_laws()[0].m, "a");
+  BodyInput<3> b = test3::body_of(Kind::tet4, test3::distorted_box(1, 1, 1, true, 0.1), test3::all_laws()[0].m, "b");
   b.mesh.nodes.row(0).array() += 3.0;
-  const Model3 model = build_model3({a, b}, Vec3::Zero());
+  const Model<3> model = build_model({a, b}, Vec3::Zero());
   const SystemMatrix s = make_system_matrix(model);
   const int n = model.num_nodes();
   Eigen::MatrixXi share = Eigen::MatrixXi::Identity(n, n);

@@ -49,7 +49,7 @@ TEST(VariableStep, CriticalStepOfTheCurrentConfiguration) {
   //  - an inverted cell gives 0.
   for (ElementKind kind : verification::all_element_kinds()) {
     SCOPED_TRACE(verification::element_name(kind));
-    const Model model = single_body_model(grid_mesh(0.4, 0.2, 8, 4, 0.15, kind), nu_zero_rubber(PlaneMode::stress),
+    const Model<2> model = single_body_model(grid_mesh(0.4, 0.2, 8, 4, 0.15, kind), nu_zero_rubber(PlaneMode::stress),
                                           PlaneMode::stress, kind, 0.01);
     RunSettings settings;
     settings.dt = 0.9 * model.critical_dt;
@@ -78,7 +78,7 @@ TEST(VariableStep, CriticalStepOfTheCurrentConfiguration) {
   }
   // The squeeze of an undistorted grid of 10 mm squares, analytically.
   const double h = 0.01, cp = std::sqrt(1e6 / 1000.0);
-  const Model model = single_body_model(grid_mesh(0.04, 0.08, 4, 8, 0.0, false), nu_zero_rubber(PlaneMode::stress),
+  const Model<2> model = single_body_model(grid_mesh(0.04, 0.08, 4, 8, 0.0, false), nu_zero_rubber(PlaneMode::stress),
                                         PlaneMode::stress, ElementKind::q4_full, 0.01);
   RunSettings settings;
   settings.dt = model.critical_dt;
@@ -100,7 +100,7 @@ TEST(VariableStep, CriticalStepIsTheSameOnTwoThreads) {
   for (ElementKind kind : verification::all_element_kinds())
     for (double distortion : {0.2, 0.0}) {
       SCOPED_TRACE(std::string(verification::element_name(kind)) + (distortion > 0.0 ? " distorted" : " regular"));
-      const Model model = single_body_model(grid_mesh(2.0, 1.0, 48, 24, distortion, kind),
+      const Model<2> model = single_body_model(grid_mesh(2.0, 1.0, 48, 24, distortion, kind),
                                             nu_zero_rubber(PlaneMode::strain), PlaneMode::strain, kind, 0.01);
       RunSettings settings;
       settings.dt = model.critical_dt;
@@ -130,7 +130,7 @@ TEST(VariableStep, CriticalStepIsTheSameOnTwoThreads) {
 // mass m = rho h^2 t / 4 each on a spring E h t / (2 h): omega^2 = 2 E / (rho h^2). The
 // amplitude (strain 1e-8) keeps the law's nonlinearity far below the errors measured.
 struct Oscillator {
-  Model model;
+  Model<2> model;
   std::vector<PrescribedDof> held;
   std::vector<int> top;
   double omega = 0.0, v0 = 0.0;
@@ -203,14 +203,14 @@ TEST(VariableStep, CentralDifferencesAreSecondOrderWithAChangingStep) {
 
 // A square of 2 x 2 Q4 cells, tilted by 30 degrees so one corner hits the line y = 0 first,
 // falling at (vx, -1) m/s from 0.1 mm (as in test_contact.cpp's ContactImpact).
-Model tilted_square(double vx) {
+Model<2> tilted_square(double vx) {
   const double size = 0.01, angle = M_PI / 6.0;
   Mesh mesh = grid_mesh(size, size, 2, 2, 0.0, false);
   Mat2 rot;
   rot << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
   for (int i = 0; i < mesh.num_nodes(); ++i) mesh.nodes.col(i) = rot * (Vec2(mesh.nodes.col(i)) - Vec2(0.005, 0.005));
   mesh.nodes.row(1).array() += 1e-4 - mesh.nodes.row(1).minCoeff();
-  Model m = single_body_model(mesh, StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress), PlaneMode::stress,
+  Model<2> m = single_body_model(mesh, StVenantKirchhoff::make(1e9, 0.3, 1000.0, PlaneMode::stress), PlaneMode::stress,
                               ElementKind::q4_full, 0.01);
   for (int i = 0; i < m.num_nodes(); ++i) m.initial_velocity.segment<2>(2 * i) = Vec2(vx, -1.0);
   return m;
@@ -226,7 +226,7 @@ TEST(VariableStep, SemiExplicitContactLandsOnTheLineWhenTheStepChanges) {
   // with the internal forces' share it adds up to that change exactly.
   for (double mu : {0.0, 0.3}) {
     SCOPED_TRACE(mu);
-    const Model model = tilted_square(mu > 0.0 ? 2.0 : 0.0);
+    const Model<2> model = tilted_square(mu > 0.0 ? 2.0 : 0.0);
     const std::vector<Obstacle> line{{"ground", Vec2::Zero(), Vec2::UnitY()}};
     const double base = 0.3 * model.critical_dt;
     State s = initial_state(model, {}, base);
@@ -279,7 +279,7 @@ TEST(VariableStep, SemiExplicitContactLandsOnTheLineWhenTheStepChanges) {
 // moving down 30 % of its height over 100 wave transits: nearly quasi-static, so the cells stay
 // h x s h with s = 1 - 0.3 t / T (nu = 0).
 struct Squeeze {
-  Model model;
+  Model<2> model;
   RunSettings settings;
   double height = 0.08, cp = 0.0, ramp = 0.0;
 };
@@ -393,10 +393,10 @@ TEST(VariableStep, FixedStepRunsAreUnchanged) {
 
 // A soft rubber block (nu = 0.3 neo-Hookean, E = 1 MPa) thrown at the line y = 0 at 10 m/s,
 // about a third of its wave speed: it squashes by ~20 % and its step shrinks.
-Model soft_block() {
+Model<2> soft_block() {
   Mesh mesh = grid_mesh(0.04, 0.04, 16, 16, 0.0, false);
   mesh.nodes.row(1).array() += 1e-4;
-  Model m = single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain), PlaneMode::strain,
+  Model<2> m = single_body_model(mesh, NeoHookean::make(1e6, 0.3, 1000.0, PlaneMode::strain), PlaneMode::strain,
                               ElementKind::q4_full, 0.01);
   for (int i = 0; i < m.num_nodes(); ++i) m.initial_velocity.segment<2>(2 * i) = Vec2(2.0, -10.0);
   return m;
@@ -411,7 +411,7 @@ TEST(VariableStep, SemiExplicitImpactWithAShrinkingStep) {
   // (fixed) and 0.55 % (variable) after the rebound, 1.07 % and 1.02 % at most during the
   // impact, where v_n holds half of a step's contact impulse. Bound: the variable step's within
   // 10 % of the fixed step's.
-  const Model model = soft_block();
+  const Model<2> model = soft_block();
   const std::vector<Obstacle> line{{"ground", Vec2::Zero(), Vec2::UnitY()}};
   double residual[2] = {0.0, 0.0}, residual_end[2] = {0.0, 0.0};
   for (int interval : {0, 1}) {

@@ -79,11 +79,11 @@ inline Mesh grid_mesh(double width, double height, int nx, int ny, double distor
 }
 
 // One body of the given formulation in a model without gravity unless given.
-inline Model single_body_model(const Mesh& mesh, const Material& material, PlaneMode plane,
+inline Model<2> single_body_model(const Mesh& mesh, const Material& material, PlaneMode plane,
                                ElementKind kind, double thickness = 1.0,
                                double hourglass_coeff = 0.1,
                                const Vec2& gravity = Vec2::Zero()) {
-  BodyInput b;
+  BodyInput<2> b;
   b.name = "body";
   b.mesh = mesh;
   b.material = material;

@@ -184,7 +184,7 @@ std::string depth_text(double d) {
 // over all edges, and its depth is then below the check's tolerance.
 class BoundaryGrid {
  public:
-  BoundaryGrid(const Model& model, const BodyInfo& body) : model_(model), edges_(body.boundary_edges) {
+  BoundaryGrid(const Model<2>& model, const BodyInfo<2>& body) : model_(model), edges_(body.boundary_edges) {
     if (edges_.empty()) return;
     lo_ = Vec2::Constant(std::numeric_limits<double>::infinity());
     hi_ = -lo_;
@@ -306,7 +306,7 @@ class BoundaryGrid {
             at(std::max(a.x(), b.x()), lo_.x(), nx), at(std::max(a.y(), b.y()), lo_.y(), ny)};
   }
 
-  const Model& model_;
+  const Model<2>& model_;
   const std::vector<BoundaryEdge>& edges_;
   Vec2 lo_ = Vec2::Zero(), hi_ = Vec2::Zero();
   double h_ = 1.0;  // cell size [m]
@@ -348,11 +348,11 @@ InputError slave_inside_master(const CaseSpec& c, const M& model, const Body& sl
                     "\" of a contact pair, " + depth_text(depth) + " deep (the deepest node); move one of the bodies");
 }
 
-void check_initial_penetration(const CaseSpec& c, const Model& model, const RunSettings& s) {
+void check_initial_penetration(const CaseSpec& c, const Model<2>& model, const RunSettings& s) {
   check_obstacle_penetration(c, model, s.obstacles);
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
-    const BodyInfo& slave = model.bodies[s.body_pairs[k].slave];
-    const BodyInfo& master = model.bodies[s.body_pairs[k].master];
+    const BodyInfo<2>& slave = model.bodies[s.body_pairs[k].slave];
+    const BodyInfo<2>& master = model.bodies[s.body_pairs[k].master];
     const double tol = 1e-9 * std::max(body_size(model, slave), body_size(model, master));
     int worst = -1;
     double depth = tol;
@@ -368,13 +368,13 @@ void check_initial_penetration(const CaseSpec& c, const Model& model, const RunS
 // 3D: nodes inside a rigid obstacle, and slave nodes inside their pair's master body (the
 // signed distance to its boundary faces, body_contact3.hpp; nodes outside the master's
 // bounding box are skipped).
-void check_initial_penetration(const CaseSpec& c, const Model3& model, const RunSettings& s) {
+void check_initial_penetration(const CaseSpec& c, const Model<3>& model, const RunSettings& s) {
   check_obstacle_penetration(c, model, s.obstacles3);
   const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
   auto ref = [&](int j) -> Vec3 { return model.ref.col(j); };
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
-    const BodyInfo3& slave = model.bodies[s.body_pairs[k].slave];
-    const BodyInfo3& master = model.bodies[s.body_pairs[k].master];
+    const BodyInfo<3>& slave = model.bodies[s.body_pairs[k].slave];
+    const BodyInfo<3>& master = model.bodies[s.body_pairs[k].master];
     const double tol = 1e-9 * std::max(body_size(model, slave), body_size(model, master));
     const Surface3 surf = make_surface3(model, s.body_pairs[k].master);
     const BoxD<3> box = surface_box(surf, ref, 0.0);
@@ -413,14 +413,14 @@ void add_box_node_sets(const CaseSpec& c, const BodySpec& b, MeshT& mesh) {
   }
 }
 
-// The model of the case's bodies, with p's meshes: 2D (Model, p.meshes) or 3D (Model3, p.meshes3).
-void build_bodies(PreparedCase& p, Model& model) {
+// The model of the case's bodies, with p's meshes: 2D (Model<2>, p.meshes) or 3D (Model<3>, p.meshes3).
+void build_bodies(PreparedCase& p, Model<2>& model) {
   const CaseSpec& c = p.spec;
-  std::vector<BodyInput> inputs;
+  std::vector<BodyInput<2>> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
     add_box_node_sets(c, b, mesh);
-    BodyInput in;
+    BodyInput<2> in;
     in.name = b.name;
     in.material = make_material(b.material, c.plane);
     in.quad_element = b.element == "q4" ? QuadElement::full_2x2 : QuadElement::one_point_hourglass;
@@ -438,14 +438,14 @@ void build_bodies(PreparedCase& p, Model& model) {
   }
 }
 
-void build_bodies(PreparedCase& p, Model3& model) {
+void build_bodies(PreparedCase& p, Model<3>& model) {
   const CaseSpec& c = p.spec;
-  std::vector<BodyInput3> inputs;
+  std::vector<BodyInput<3>> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh3 mesh = build_mesh3(c, c.meshes.at(b.mesh));
     add_box_node_sets(c, b, mesh);
     if (c.scene_rotation) mesh.nodes = (*c.scene_rotation * mesh.nodes).eval();
-    BodyInput3 in;
+    BodyInput<3> in;
     in.name = b.name;
     in.material = make_material3(b.material);
     in.hex_element = b.element == "hex8" ? HexElement::full_2x2x2 : HexElement::one_point_hourglass;
@@ -456,18 +456,18 @@ void build_bodies(PreparedCase& p, Model3& model) {
     inputs.push_back(std::move(in));
   }
   try {
-    model = build_model3(inputs, c.turned(c.gravity));
+    model = build_model(inputs, c.turned(c.gravity));
   } catch (const std::invalid_argument& e) {
     throw InputError(c.file + ": bodies: " + e.what());
   }
 }
 
-const std::vector<Mesh>& meshes_of(const PreparedCase& p, const Model&) { return p.meshes; }
-const std::vector<Mesh3>& meshes_of(const PreparedCase& p, const Model3&) { return p.meshes3; }
-std::vector<Obstacle>& obstacles_in(RunSettings& s, const Model&) { return s.obstacles; }
-std::vector<Obstacle3>& obstacles_in(RunSettings& s, const Model3&) { return s.obstacles3; }
-const Obstacle& shape_of(const ObstacleSpec& o, const Model&) { return o.shape; }
-const Obstacle3& shape_of(const ObstacleSpec& o, const Model3&) { return o.shape3; }
+const std::vector<Mesh>& meshes_of(const PreparedCase& p, const Model<2>&) { return p.meshes; }
+const std::vector<Mesh3>& meshes_of(const PreparedCase& p, const Model<3>&) { return p.meshes3; }
+std::vector<Obstacle>& obstacles_in(RunSettings& s, const Model<2>&) { return s.obstacles; }
+std::vector<Obstacle3>& obstacles_in(RunSettings& s, const Model<3>&) { return s.obstacles3; }
+const Obstacle& shape_of(const ObstacleSpec& o, const Model<2>&) { return o.shape; }
+const Obstacle3& shape_of(const ObstacleSpec& o, const Model<3>&) { return o.shape3; }
 // An obstacle turned by the case's scene rotation (3D).
 const Obstacle& turned(const CaseSpec&, const Obstacle& o) { return o; }
 Obstacle3 turned(const CaseSpec& c, const Obstacle3& o) {

@@ -23,9 +23,9 @@ struct ProbeInfo {
 struct PreparedCase {
   CaseSpec spec;
   std::vector<Mesh> meshes;  // per body, after scale and offset, with all node sets (2D)
-  Model model;
+  Model<2> model;
   std::vector<Mesh3> meshes3;  // the same in 3D
-  Model3 model3;
+  Model<3> model3;
   int dimension() const { return spec.dimension; }
   RunSettings settings;     // settings.dt: the step of the run, decided by prepare_case
   // The step was chosen automatically (time.dt absent): safety x critical_time_step().
@@ -34,7 +34,7 @@ struct PreparedCase {
   std::vector<ProbeInfo> probes;
 };
 
-// fn(model) with the case's model, a Model or a Model3 (they share the names fn may use:
+// fn(model) with the case's model, a Model<2> or a Model<3> (they share the names fn may use:
 // bodies, num_nodes(), num_cells(), critical_dt, critical_cell, ref, mass, kDim).
 template <class Fn>
 decltype(auto) with_model(const PreparedCase& pc, Fn&& fn) {

@@ -18,7 +18,6 @@
 #include "harness/outputs/vtu_writer.hpp"
 #include "solver/schemes/implicit.hpp"
 #include "solver/model/model.hpp"
-#include "solver/model/model3.hpp"
 
 namespace ricochet {
 

@@ -33,7 +33,7 @@ void set_arrays(Data& d, const FieldSnapshot& f, const Map& u, const Map& v, con
 }
 
 std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
-  const Model& m = pc.model;
+  const Model<2>& m = pc.model;
   VtuData d;
   d.time = f.time;
   const Eigen::Map<const Eigen::Matrix2Xd> u(f.u.data(), 2, m.num_nodes());
@@ -87,7 +87,7 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
 // then its tetrahedra, as the model numbers them and VtuData3 writes them: VTU's order is the
 // cells', hexes then tets per body, so the per-cell values need no reordering).
 std::string format_vtu_snapshot3(const PreparedCase& pc, const FieldSnapshot& f) {
-  const Model3& m = pc.model3;
+  const Model<3>& m = pc.model3;
   const int n = m.num_nodes();
   if (f.contact_force.size() != 3 * static_cast<std::size_t>(n) ||
       f.cauchy.size() != 6 * static_cast<std::size_t>(m.num_cells()) || f.green_lagrange.size() != f.cauchy.size())

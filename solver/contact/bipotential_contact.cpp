@@ -246,8 +246,8 @@ void contact_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
   template void contact_phase<M>(const M&, const std::vector<ObstacleOf<M>>&, const ContactSettings&,        \
                                  BipotentialContactT<M::kDim>&, State&);                                     \
   template void add_reaction_accelerations<M>(const M&, const BipotentialContactT<M::kDim>&, State&);
-RICOCHET_BIPOTENTIAL_FOR(Model)
-RICOCHET_BIPOTENTIAL_FOR(Model3)
+RICOCHET_BIPOTENTIAL_FOR(Model<2>)
+RICOCHET_BIPOTENTIAL_FOR(Model<3>)
 #undef RICOCHET_BIPOTENTIAL_FOR
 
 }  // namespace ricochet

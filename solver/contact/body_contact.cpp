@@ -6,7 +6,7 @@
 
 namespace ricochet {
 
-Surface make_surface(const Model& model, int body) {
+Surface make_surface(const Model<2>& model, int body) {
   Surface s;
   s.body = body;
   // Boundary edges run as their cell does (counter-clockwise, build_model checks positive
@@ -27,12 +27,12 @@ Surface make_surface(const Model& model, int body) {
   return s;
 }
 
-double depth_inside(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
+double depth_inside(const Model<2>& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
   const double d = signed_distance(model, surf, u, x);
   return d < 0.0 ? -d : 0.0;
 }
 
-double signed_distance(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
+double signed_distance(const Model<2>& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x) {
   bool in = false;
   double dist = std::numeric_limits<double>::infinity();
   for (const SurfaceSegment& sg : surf.segments) {

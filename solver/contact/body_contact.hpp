@@ -68,9 +68,9 @@ struct Surface {
   double max_length = 0.0;  // longest reference segment [m]
 };
 
-// The boundary of `body` as oriented segments: its boundary edges (BodyInfo::boundary_edges), in
+// The boundary of `body` as oriented segments: its boundary edges (BodyInfo<2>::boundary_edges), in
 // their order (throws std::logic_error for a body without any).
-Surface make_surface(const Model& model, int body);
+Surface make_surface(const Model<2>& model, int body);
 
 // Which nodes and coefficients a contact's relative motion is made of (1 node for a rigid
 // obstacle, 3 for node to segment), and the factors coef_j w_j with w_j = dt^2/m_j (position
@@ -238,9 +238,9 @@ auto surface_box(const S& surf, const Pos& pos, double margin) {
 
 // Depth of point x inside the master body bounded by `surf` at displacements u: the distance to
 // the nearest segment if x is inside (even-odd crossing rule), else 0 [m].
-double depth_inside(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
+double depth_inside(const Model<2>& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
 // The signed distance of x to the master body bounded by `surf` at displacements u: the distance
 // to the nearest segment, negative if x is inside (even-odd crossing rule) [m].
-double signed_distance(const Model& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
+double signed_distance(const Model<2>& model, const Surface& surf, const Eigen::VectorXd& u, const Vec2& x);
 
 }  // namespace ricochet

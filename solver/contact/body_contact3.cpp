@@ -6,10 +6,10 @@
 
 namespace ricochet {
 
-Surface3 make_surface3(const Model3& model, int body) {
+Surface3 make_surface3(const Model<3>& model, int body) {
   Surface3 s;
   s.body = body;
-  // Boundary faces run counter-clockwise seen from outside (mesh3.hpp; build_model3 checks
+  // Boundary faces run counter-clockwise seen from outside (mesh3.hpp; build_model checks
   // positive volumes), so x_xi x x_eta is outward.
   for (const BoundaryFace& bf : model.bodies[body].boundary_faces) {
     SurfaceFace f;
@@ -61,12 +61,12 @@ Surface3 make_surface3(const Model3& model, int body) {
   return s;
 }
 
-double signed_distance(const Model3& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x) {
+double signed_distance(const Model<3>& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x) {
   auto pos = [&](int j) -> Vec3 { return model.ref.col(j) + u.segment<3>(3 * j); };
   return surface_signed_distance(surf, pos, x);
 }
 
-double depth_inside(const Model3& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x) {
+double depth_inside(const Model<3>& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x) {
   const double d = signed_distance(model, surf, u, x);
   return d < 0.0 ? -d : 0.0;
 }

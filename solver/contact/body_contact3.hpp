@@ -2,9 +2,9 @@
 // Contact between bodies in 3D: node to face). The 3D counterpart of body_contact.hpp's node to
 // segment: the master's surface, the projection of a point onto a face, the face choice for a
 // slave node and the depth of a point inside the master. The contact set (contact_set.hpp) uses it
-// for the body pairs of a Model3, in all three schemes.
+// for the body pairs of a Model<3>, in all three schemes.
 //
-// The master's surface is its boundary faces (BodyInfo3::boundary_faces): quadrilaterals of
+// The master's surface is its boundary faces (BodyInfo<3>::boundary_faces): quadrilaterals of
 // hexahedra and triangles of tetrahedra, their corners counter-clockwise seen from outside the
 // body (mesh3.hpp), so the right-hand rule gives the outward normal. Each face is parametrized on
 // [0, 1]^2 (quadrilateral, bilinear) or on the unit triangle xi, eta >= 0, xi + eta <= 1:
@@ -55,7 +55,7 @@
 #include <Eigen/Geometry>  // cross()
 
 #include "solver/contact/body_contact.hpp"  // StencilN, BoxD, surface_box
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 
@@ -85,9 +85,9 @@ struct Surface3 {
   double max_length = 0.0;              // longest reference face edge [m]
 };
 
-// The boundary of `body` as faces, in the order of BodyInfo3::boundary_faces, with their
+// The boundary of `body` as faces, in the order of BodyInfo<3>::boundary_faces, with their
 // neighbours (throws std::logic_error for a body without any).
-Surface3 make_surface3(const Model3& model, int body);
+Surface3 make_surface3(const Model<3>& model, int body);
 
 // The projection of a point x onto a face: (xi, eta) unclamped (outside the face when the nearest
 // point of the face's extension is), the point p there, the outward unit normal n at p, the gap
@@ -562,8 +562,8 @@ double surface_signed_distance(const Surface3& surf, const Pos& pos, const Vec3&
 
 // The signed distance of x to the master body bounded by `surf` at displacements u (3 DOFs a
 // node): surface_signed_distance at X + u [m].
-double signed_distance(const Model3& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x);
+double signed_distance(const Model<3>& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x);
 // Depth of x inside that body: minus the signed distance if x is inside, else 0 [m].
-double depth_inside(const Model3& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x);
+double depth_inside(const Model<3>& model, const Surface3& surf, const Eigen::VectorXd& u, const Vec3& x);
 
 }  // namespace ricochet

@@ -133,8 +133,8 @@ double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
   template double penetration<M>(const M&, const std::vector<ObstacleOf<M>>&,                                    \
                                  const std::vector<typename Space<M::kDim>::Surface>&,                           \
                                  const std::vector<ContactCandidate>&, const Eigen::VectorXd&);
-RICOCHET_CONTACT_SET_FOR(Model)
-RICOCHET_CONTACT_SET_FOR(Model3)
+RICOCHET_CONTACT_SET_FOR(Model<2>)
+RICOCHET_CONTACT_SET_FOR(Model<3>)
 #undef RICOCHET_CONTACT_SET_FOR
 
 }  // namespace ricochet

@@ -33,7 +33,7 @@
 #include "solver/contact/obstacle3.hpp"
 #include "solver/core/loads.hpp"
 #include "solver/core/state.hpp"
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 

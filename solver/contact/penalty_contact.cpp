@@ -29,15 +29,15 @@ double penalty_bulk_modulus(const Material3& material) {
 namespace {
 
 // k_s / f_si = K l^2 e / A_c of one boundary segment (its length l, its cell's area A_c).
-double segment_stiffness_per_scale(const Model& model, const BodyInfo& body, const BoundaryEdge& e, double bulk) {
+double segment_stiffness_per_scale(const Model<2>& model, const BodyInfo<2>& body, const BoundaryEdge& e, double bulk) {
   const double l2 = (model.ref.col(e.b) - model.ref.col(e.a)).squaredNorm();
   return bulk * l2 * body.thickness / e.cell_area;
 }
 
 // Per node of the model: k_i / f_si = sum over its boundary segments of k_s / (2 f_si).
-std::vector<double> nodal_stiffness_per_scale(const Model& model) {
+std::vector<double> nodal_stiffness_per_scale(const Model<2>& model) {
   std::vector<double> k(model.num_nodes(), 0.0);
-  for (const BodyInfo& body : model.bodies) {
+  for (const BodyInfo<2>& body : model.bodies) {
     const double bulk = penalty_bulk_modulus(body.material);
     for (const BoundaryEdge& e : body.boundary_edges) {
       const double ks = segment_stiffness_per_scale(model, body, e, bulk);
@@ -52,16 +52,16 @@ std::vector<double> nodal_stiffness_per_scale(const Model& model) {
 // A the face's reference area (a quadrilateral's |d13 x d24| / 2, exact for a flat face; a
 // triangle's |e1 x e2| / 2), V its cell's reference volume; each of the face's corners gets
 // k_s / corners. (2D is this with A = l e, V = A_c e.)
-double face_stiffness_per_scale(const Model3& model, const BoundaryFace& f, double bulk) {
+double face_stiffness_per_scale(const Model<3>& model, const BoundaryFace& f, double bulk) {
   auto x = [&](int a) -> Vec3 { return model.ref.col(f.nodes[a]); };
   const Vec3 normal2 = f.corners == 4 ? Vec3((x(2) - x(0)).cross(x(3) - x(1))) : Vec3((x(1) - x(0)).cross(x(2) - x(0)));
   const double area = 0.5 * normal2.norm();
   return bulk * area * area / f.cell_volume;
 }
 
-std::vector<double> nodal_stiffness_per_scale(const Model3& model) {
+std::vector<double> nodal_stiffness_per_scale(const Model<3>& model) {
   std::vector<double> k(model.num_nodes(), 0.0);
-  for (const BodyInfo3& body : model.bodies) {
+  for (const BodyInfo<3>& body : model.bodies) {
     const double bulk = penalty_bulk_modulus(body.material);
     for (const BoundaryFace& f : body.boundary_faces) {
       const double ks = face_stiffness_per_scale(model, f, bulk);
@@ -92,7 +92,7 @@ PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<
   std::vector<double> m_master(c.surfaces.size()), k_max(c.surfaces.size(), 0.0);
   if constexpr (D == 2)
   for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
-    const BodyInfo& master = model.bodies[c.surfaces[q].body];
+    const BodyInfo<2>& master = model.bodies[c.surfaces[q].body];
     const double bulk = penalty_bulk_modulus(master.material);
     for (const BoundaryEdge& e : master.boundary_edges) {
       const double ks = segment_stiffness_per_scale(model, master, e, bulk);
@@ -106,7 +106,7 @@ PenaltyContactT<M::kDim> make_penalty_contact(const M& model, const std::vector<
   // k_s = f_si K A^2 / V, the face the slave node meets playing the 2D segment's part.
   if constexpr (D == 3)
   for (std::size_t q = 0; q < c.surfaces.size(); ++q) {
-    const BodyInfo3& master = model.bodies[c.surfaces[q].body];
+    const BodyInfo<3>& master = model.bodies[c.surfaces[q].body];
     const double bulk = penalty_bulk_modulus(master.material);
     for (const BoundaryFace& f : master.boundary_faces) {
       const double ks = face_stiffness_per_scale(model, f, bulk);
@@ -257,8 +257,8 @@ void penalty_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
       const std::vector<PrescribedDof>&, const PenaltySettings&, const std::vector<BodyPair>&);                \
   template double penalty_critical_dt<M>(const M&, const PenaltyContactT<M::kDim>&);                           \
   template void penalty_phase<M>(const M&, const std::vector<ObstacleOf<M>>&, PenaltyContactT<M::kDim>&, State&);
-RICOCHET_PENALTY_FOR(Model)
-RICOCHET_PENALTY_FOR(Model3)
+RICOCHET_PENALTY_FOR(Model<2>)
+RICOCHET_PENALTY_FOR(Model<3>)
 #undef RICOCHET_PENALTY_FOR
 
 }  // namespace ricochet

@@ -91,8 +91,8 @@ struct ForceTotals {
 // The workspace of the threaded force pass, made once per model (make_force_scratch). The
 // cells are cut into chunks of a fixed number of cells (whatever the number of threads); the
 // chunks run in parallel and store each cell's nodal forces at the cell's place in
-// element_forces (d N values per cell, d = Model::kDim, the cells in the order of the
-// for_each_block of element_kernels.hpp, or element_kernels3.hpp for a Model3); then every node
+// element_forces (d N values per cell, d = Model<2>::kDim, the cells in the order of the
+// for_each_block of element_kernels2.hpp, or element_kernels3.hpp for a Model<3>); then every node
 // sums its entries in that order, the order in which a serial scatter adds them, and the
 // chunks' totals are combined in chunk order. So the forces equal the serial pass's, and no
 // result depends on the number of threads. One type for both dimensions, with a layout of
@@ -101,7 +101,7 @@ struct ForceTotals {
 // forces kLanes and 2 kLanes after its x force) is described in internal_forces3.hpp.
 struct ForceScratch {
   struct Chunk {
-    int kind = 0;             // the block kind: a BlockKind (Model) or BlockKind3 (Model3)
+    int kind = 0;             // the block kind: a BlockKind (Model<2>) or BlockKind3 (Model<3>)
     std::size_t block = 0;    // index among the model's blocks of that kind
     std::size_t begin = 0, end = 0;  // the block's cells begin <= e < end
     std::size_t out = 0;      // offset of the block's first cell in element_forces

@@ -16,7 +16,7 @@ using Mat3 = Eigen::Matrix3d;
 // uses it too (a slab of that depth), so energies and forces are per body, never per metre.
 enum class PlaneMode { stress, strain };
 
-// Cells per batch of the vectorized force kernels (element_kernels.hpp): one AVX-512 register
+// Cells per batch of the vectorized force kernels (element_kernels2.hpp): one AVX-512 register
 // of doubles, two AVX2 registers.
 inline constexpr int kLanes = 8;
 

@@ -1,12 +1,12 @@
 // The 3D element kernels, one element at a time (docs/three-dimensions.md, "Elements in 3D"):
 // the 8-node hexahedron with 2x2x2 Gauss points, the one-point hexahedron with
 // Flanagan-Belytschko hourglass control, and the 4-node tetrahedron, in the total-Lagrangian
-// form of the 2D kernels (element_kernels.hpp): F = I + sum_a u_a (x) dN_a/dX at each point,
+// form of the 2D kernels (element_kernels2.hpp): F = I + sum_a u_a (x) dN_a/dX at each point,
 // the material response P(F) (and A = dP/dF), nodal forces f_a = sum_points vol P dN_a/dX, the
 // strain energy sum vol W(F), the smallest det F; the element matrix K = sum vol B^T A B. Plus
 // what the model needs of each cell once: the reference geometry (gradients, volumes,
 // hourglass vectors and coefficient), the lumped masses and the critical-step length.
-// The 3D model (model3.hpp) builds its geometry, masses and critical lengths with these; the 3D
+// The 3D model (model.hpp, blocks3.hpp) builds its geometry, masses and critical lengths with these; the 3D
 // force pass (element_kernels3.hpp) runs the same formulations on batches of cells, equal to
 // these kernels to round-off; no scheme uses them yet (docs/three-dimensions.md, Not wired in
 // yet).
@@ -77,7 +77,7 @@ struct Hex8Geom {
 bool hex8_geometry(const Hex8Nodes& x, Hex8Geom& g);
 
 // J = dX/dxi at the 2x2x2 Gauss point q, the matrix hex8_geometry() inverts (the same arithmetic,
-// so the same bits): the 3D model stores J^-1 and det J per point instead of dN/dX (model3.hpp).
+// so the same bits): the 3D model stores J^-1 and det J per point instead of dN/dX (model.hpp, blocks3.hpp).
 Mat3 hex8_jacobian(const Hex8Nodes& x, int q);
 
 // One point: the mean ("uniform strain") gradients B = (1/V) int dN/dX dV = b / V with

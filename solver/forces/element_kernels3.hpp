@@ -1,7 +1,7 @@
 // The 3D force kernels (docs/three-dimensions.md, "The 3D model and force pass"): the
 // formulations of element3d.hpp (hexahedron with 2x2x2 points, one-point hexahedron with
 // Flanagan-Belytschko hourglass control, tetrahedron) on kLanes cells at once, from the blocks'
-// structure-of-arrays geometry (model3.hpp), as the 2D force_kernel() of element_kernels.hpp:
+// structure-of-arrays geometry (model.hpp, blocks3.hpp), as the 2D force_kernel() of element_kernels2.hpp:
 // gather, F at each point, the material law on all lanes (material_lanes3.hpp), the nodal
 // forces; then lane by lane in cell order the forces go out and the pass's per-point work and
 // the energy sums run, so every sum keeps the serial order.
@@ -32,7 +32,7 @@
 //   gamma (32 values a cell) is stored or multiplied. The viscous form does the same with v.
 //
 // Each kernel is `[[gnu::noinline, gnu::flatten]]` per (element, material, pass), as in 2D, so
-// the law inlines into its loop. The pass provides element_kernels.hpp's contract for
+// the law inlines into its loop. The pass provides element_kernels2.hpp's contract for
 // force_kernel() (kEnergy, kPerPoint, kEveryPoint, Response{P}, begin_element(), screen(mat, F,
 // P, det, may), point<kPoints>(mat, F, det, response, nullptr, vol, cell, may),
 // end_element<kPoints>(e, cell), finish(t)) with 3x3 F and P.
@@ -47,14 +47,14 @@
 
 #include "solver/forces/internal_forces.hpp"
 #include "solver/materials/material_lanes3.hpp"
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 
 // Calls fn(block, material, std::bool_constant<viscous hourglass control>) for block k of
 // `kind`, with its material's own type (one std::visit per block).
 template <class Fn>
-void visit_block(const Model3& model, BlockKind3 kind, std::size_t k, Fn&& fn) {
+void visit_block(const Model<3>& model, BlockKind3 kind, std::size_t k, Fn&& fn) {
   switch (kind) {
     case BlockKind3::hex8_hourglass: {
       const Hex8OnePointBlock& b = model.hex8_hourglass[k];
@@ -79,7 +79,7 @@ void visit_block(const Model3& model, BlockKind3 kind, std::size_t k, Fn&& fn) {
 
 // visit_block for every element block, in the order every pass sums f_int (kBlockKinds3).
 template <class Fn>
-void for_each_block(const Model3& model, Fn&& fn) {
+void for_each_block(const Model<3>& model, Fn&& fn) {
   for (const BlockKind3 kind : kBlockKinds3)
     for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
 }
@@ -536,6 +536,12 @@ struct DirectScatter3 {
 // (3 a + k) kLanes + e % kLanes (ElementStore3::entry).
 struct ElementStore3 {
   double* out;  // this block's first batch
+  static constexpr int kStride = kLanes;  // from an entry's x to its y, and its y to its z
+  // The entries of `cells` cells, in whole batches.
+  template <int N>
+  static constexpr std::size_t size(std::size_t cells) {
+    return 3 * N * kLanes * ((cells + kLanes - 1) / kLanes);
+  }
   template <int N>
   static constexpr std::size_t entry(std::size_t e, int a) {
     return 3 * N * (e - e % kLanes) + 3 * a * kLanes + e % kLanes;
@@ -550,6 +556,15 @@ struct ElementStore3 {
 #pragma omp simd
         for (int l = 0; l < kLanes; ++l) o[(3 * a + k) * kLanes + l] = fe.v[k][a][l];
   }
+};
+
+// The 3D force pass's outputs (internal_forces.cpp). On one thread the threaded pass adds its
+// chunks' forces straight into f, the same bits as the store and the gather.
+template <>
+struct ForceOutput<3> {
+  using Scatter = DirectScatter3;
+  using Store = ElementStore3;
+  static constexpr bool kScatterOnOneThread = true;
 };
 
 // A batch row is kLanes = 8 doubles, one 512-bit vector. Where the target has AVX-512
@@ -573,7 +588,7 @@ template <bool kViscous, class Pass, class Mat, class Out>
 [[gnu::noinline, gnu::flatten, RICOCHET_KERNEL_VECTORS]] void force_kernel(
     const Tet4Block& b, const Mat& material, const double* u, const double*, const Out& out, const Pass& pass_in,
     ForceTotals& t, std::size_t e0 = 0, std::size_t e1 = SIZE_MAX) {
-  const Mat mat = material;  // a local copy: its constants cannot alias f (element_kernels.hpp)
+  const Mat mat = material;  // a local copy: its constants cannot alias f (element_kernels2.hpp)
   Pass pass = pass_in;
   double energy = 0.0;
   alignas(64) double min_j[kLanes];
@@ -749,6 +764,46 @@ template <bool kViscous, class Pass, class Mat, class Out>
   t.hourglass_power += hg_power;
   t.min_jacobian = *std::min_element(min_j, min_j + kLanes);
   pass.finish(t);
+}
+
+// Calls fn(global cell, the cell's points' values, weights) for every cell in for_each_block's
+// order: point(material, F, P, det F) at each integration point with F from the kernels' arithmetic
+// (element_kernels3.hpp: the force pass's F, bit for bit) and P = mat.first_piola(F), and each
+// point's reference volume. Cells of one point pass one value.
+template <class Point, class Fn>
+void for_each_cell_points(const Model<3>& model, const double* u, Point&& point, Fn&& fn) {
+  for (const BlockKind3 kind : kBlockKinds3)
+    for (std::size_t k = 0; k < model.num_blocks(kind); ++k)
+      visit_block(model, kind, k, [&](const auto& b, const auto& mat, auto) {
+        using Block = std::decay_t<decltype(b)>;
+        for (std::size_t e = 0; e < b.conn.size(); ++e) {
+          const int cell = b.first_cell + static_cast<int>(e);
+          const Nodes3<Block::kNodes> ue = gather3<Block::kNodes>(u, b.conn[e]);
+          if constexpr (std::is_same_v<Block, Hex8Block>) {
+            std::array<Mat3, 8> F;
+            hex8_point_gradients(b, e, ue, F);
+            std::array<decltype(point(mat, F[0], F[0], 1.0)), 8> values;
+            std::array<double, 8> vol;
+            for (int q = 0; q < 8; ++q) {
+              values[q] = point(mat, F[q], mat.first_piola(F[q]), F[q].determinant());
+              vol[q] = b.geom(e, Hex8Lanes::vol(q));
+            }
+            fn(cell, values.data(), vol.data(), 8);
+          } else {
+            Mat3 F;
+            double vol;
+            if constexpr (std::is_same_v<Block, Tet4Block>) {
+              F = tet4_gradient(b, e, ue);
+              vol = b.geom(e, Tet4Lanes::kVol);
+            } else {
+              F = hex8_one_point_gradient(b, e, ue);
+              vol = b.geom(e, Hex8OnePointLanes::kVol);
+            }
+            const auto value = point(mat, F, mat.first_piola(F), F.determinant());
+            fn(cell, &value, &vol, 1);
+          }
+        }
+      });
 }
 
 }  // namespace ricochet

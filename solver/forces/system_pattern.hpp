@@ -1,5 +1,5 @@
 // The fixed sparsity pattern of a SystemMatrix (tangent.hpp), in either dimension: one build
-// for make_system_matrix(const Model&) (tangent.cpp, D = 2) and make_system_matrix(const Model3&)
+// for make_system_matrix(const Model<2>&) (tangent.cpp, D = 2) and make_system_matrix(const Model<3>&)
 // (tangent3.cpp, D = 3). Index arithmetic only: no floating-point value depends on it.
 #pragma once
 

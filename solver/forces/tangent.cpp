@@ -4,7 +4,7 @@
 #include <tuple>
 #include <type_traits>
 
-#include "solver/forces/element_kernels.hpp"
+#include "solver/forces/element_kernels2.hpp"
 #include "solver/forces/system_pattern.hpp"
 
 namespace ricochet {
@@ -60,7 +60,7 @@ inline void scatter_matrix(double* val, const int* slot, const ElementMatrix<N>&
   }
 }
 
-// The assembly pass (element_kernels.hpp): P and A = dP/dF in one evaluation at each point
+// The assembly pass (element_kernels2.hpp): P and A = dP/dF in one evaluation at each point
 // (first_piola_and_tangent), the element matrix k_scale K_T + c_scale C of each cell, scattered
 // through `slots` (this block's, 4 N^2 per cell).
 template <bool kEnergy_, int N>
@@ -99,9 +99,9 @@ struct SystemPass {
 };
 
 // Blocks in the order of for_each_block, as internal_forces sums f_int; the slots are stored in
-// Model order (q4_full, q4_hourglass, t3).
+// Model<2> order (q4_full, q4_hourglass, t3).
 template <bool kEnergy>
-void all_blocks(const Model& model, const double* u, const double* v, double k_scale, double c_scale,
+void all_blocks(const Model<2>& model, const double* u, const double* v, double k_scale, double c_scale,
                 double* val, double* f, const int* slots, ForceTotals& t) {
   std::size_t off_full = 0, off_hg = 0, off_t3 = 0;
   for (const auto& b : model.q4_full) off_hg += 64 * b.conn.size();
@@ -122,13 +122,13 @@ void all_blocks(const Model& model, const double* u, const double* v, double k_s
 
 }  // namespace
 
-// Slots in Model order (q4_full, q4_hourglass, t3), the order of for_each_cell_block.
-SystemMatrix make_system_matrix(const Model& model) {
+// Slots in Model<2> order (q4_full, q4_hourglass, t3), the order of for_each_cell_block.
+SystemMatrix make_system_matrix(const Model<2>& model) {
   return system_pattern::make_system_matrix<2>(
       model.num_nodes(), [&model](auto&& fn) { for_each_cell_block(model, fn); });
 }
 
-ForceTotals assemble_system(const Model& model, const double* u, const double* v, double m_scale,
+ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy) {
   const int ndof = model.num_dofs();

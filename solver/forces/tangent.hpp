@@ -4,16 +4,14 @@
 // matrix of fixed pattern and, in the same pass, the internal forces exactly as internal_forces
 // computes them.
 // DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver; in 3D (x0, y0, z0, x1, ...)
-// (tangent3.cpp: the same two functions for a Model3).
+// (tangent3.cpp: the same two functions for a Model<3>).
 #pragma once
 
 #include <Eigen/SparseCore>
 #include <vector>
 
 #include "solver/forces/internal_forces.hpp"
-#include "solver/forces/internal_forces3.hpp"
 #include "solver/model/model.hpp"
-#include "solver/model/model3.hpp"
 
 namespace ricochet {
 
@@ -24,15 +22,15 @@ namespace ricochet {
 // columns (so the diagonal exists even for a node in no cell).
 struct SystemMatrix {
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix;
-  // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model; in 3D
-  // hex8_hourglass, hex8_full, tet4 as in Model3), the positions in matrix.valuePtr() of its
+  // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model<2>; in 3D
+  // hex8_hourglass, hex8_full, tet4 as in Model<3>), the positions in matrix.valuePtr() of its
   // (DN x DN) entries, row-major over element dofs
   std::vector<int> slots;
   Eigen::VectorXd diagonal;  // copy of the diagonal after assembly (for Jacobi preconditioning)
   std::vector<int> diagonal_slots;  // position of entry (d, d) in matrix.valuePtr(), per DOF
 };
 
-SystemMatrix make_system_matrix(const Model& model);
+SystemMatrix make_system_matrix(const Model<2>& model);
 
 // Assembles A = m_scale * M + k_scale * K_T(u) + c_scale * C into s.matrix (values overwritten),
 // where M is the lumped mass (diagonal), K_T = d f_int / d u at velocity v (material + geometric
@@ -41,17 +39,17 @@ SystemMatrix make_system_matrix(const Model& model);
 // in the same element pass writes f_int(u, v) into f_int (same values as internal_forces) and
 // returns the same ForceTotals (energies only when with_energy).
 // `s` must come from make_system_matrix(model). Performs no heap allocation.
-ForceTotals assemble_system(const Model& model, const double* u, const double* v, double m_scale,
+ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);
 
-// The same for a Model3 (tangent3.cpp): D = 3 DOFs per node, the pattern of the 3D cells, and
+// The same for a Model<3> (tangent3.cpp): D = 3 DOFs per node, the pattern of the 3D cells, and
 // the element matrices of element3d.hpp (hex8_stiffness, hex8_one_point_stiffness,
 // tet4_stiffness) on the geometry rebuilt by cell_geometry() (model3.hpp). f_int and the totals
-// come from the 3D force pass, internal_forces(const Model3&, ...), so the Newton residual and
+// come from the 3D force pass, internal_forces(const Model<3>&, ...), so the Newton residual and
 // the assembly see the same forces bit for bit.
-SystemMatrix make_system_matrix(const Model3& model);
-ForceTotals assemble_system(const Model3& model, const double* u, const double* v, double m_scale,
+SystemMatrix make_system_matrix(const Model<3>& model);
+ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);
 

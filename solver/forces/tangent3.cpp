@@ -1,4 +1,4 @@
-// The implicit scheme's iteration matrix for a Model3 (tangent.hpp): the pattern of the 3D cells
+// The implicit scheme's iteration matrix for a Model<3> (tangent.hpp): the pattern of the 3D cells
 // with three DOFs per node, and A = m_scale M + k_scale K_T + c_scale C assembled from the
 // element matrices of element3d.hpp, one cell at a time.
 #include <algorithm>
@@ -15,7 +15,7 @@ namespace {
 // fn(block) for every element block in the order of SystemMatrix::slots: one-point hexahedra,
 // 2x2x2 hexahedra, tetrahedra (kBlockKinds3, the order the force pass sums f_int in).
 template <class Fn>
-void for_each_slot_block(const Model3& model, Fn&& fn) {
+void for_each_slot_block(const Model<3>& model, Fn&& fn) {
   for (const auto& b : model.hex8_hourglass) fn(b);
   for (const auto& b : model.hex8_full) fn(b);
   for (const auto& b : model.tet4) fn(b);
@@ -41,7 +41,7 @@ void scatter(double* val, const int* slot, const ElementMatrix3<N>& K) {
 // stiffness form), C = the hourglass matrix (viscous form); 2x2x2 hexahedra and tetrahedra have
 // no damping matrix.
 template <class Law>
-void element_matrix(const Model3& model, const Hex8OnePointBlock& b, std::size_t e, const Law& law,
+void element_matrix(const Model<3>& model, const Hex8OnePointBlock& b, std::size_t e, const Law& law,
                     const double* u, const double* v, double k_scale, double c_scale, Hex8Nodes& f,
                     Hex8Matrix& K) {
   Hex8Matrix C;
@@ -50,14 +50,14 @@ void element_matrix(const Model3& model, const Hex8OnePointBlock& b, std::size_t
   K = k_scale * K + c_scale * C;
 }
 template <class Law>
-void element_matrix(const Model3& model, const Hex8Block& b, std::size_t e, const Law& law, const double* u,
+void element_matrix(const Model<3>& model, const Hex8Block& b, std::size_t e, const Law& law, const double* u,
                     const double*, double k_scale, double, Hex8Nodes& f, Hex8Matrix& K) {
   const Hex8Geom g = cell_geometry(model, b, e);
   hex8_stiffness<false>(g, law, gather<8>(u, b.conn[e]), f, K);
   K *= k_scale;
 }
 template <class Law>
-void element_matrix(const Model3& model, const Tet4Block& b, std::size_t e, const Law& law, const double* u,
+void element_matrix(const Model<3>& model, const Tet4Block& b, std::size_t e, const Law& law, const double* u,
                     const double*, double k_scale, double, Tet4Nodes& f, Tet4Matrix& K) {
   const Tet4Geom g = cell_geometry(model, b, e);
   tet4_stiffness<false>(g, law, gather<4>(u, b.conn[e]), f, K);
@@ -66,12 +66,12 @@ void element_matrix(const Model3& model, const Tet4Block& b, std::size_t e, cons
 
 }  // namespace
 
-SystemMatrix make_system_matrix(const Model3& model) {
+SystemMatrix make_system_matrix(const Model<3>& model) {
   return system_pattern::make_system_matrix<3>(model.num_nodes(),
                                                [&model](auto&& fn) { for_each_slot_block(model, fn); });
 }
 
-ForceTotals assemble_system(const Model3& model, const double* u, const double* v, double m_scale,
+ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy) {
   const int ndof = model.num_dofs();

@@ -1,5 +1,5 @@
 // The material laws on kLanes deformation gradients at once, for the vectorized force kernels
-// (element_kernels.hpp): first_piola_lanes(mat, F, P) sets P = mat.first_piola(F) lane by lane,
+// (element_kernels2.hpp): first_piola_lanes(mat, F, P) sets P = mat.first_piola(F) lane by lane,
 // with the same arithmetic, so the two give the same bits.
 //
 // "The same arithmetic" includes Eigen's own fused multiply-adds: Eigen evaluates the 2x2

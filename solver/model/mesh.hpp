@@ -32,7 +32,7 @@ double q4_corner_quality(const Mesh& mesh, const std::array<int, 4>& q);
 // An edge used by exactly one cell, oriented as that cell runs: counter-clockwise, so the body
 // lies on its left and its outward normal is (e_y, -e_x)/|e| for e = x_b - x_a.
 struct BoundaryEdge {
-  int a = 0, b = 0;        // node indices (of the mesh, or global ones in a Model)
+  int a = 0, b = 0;        // node indices (of the mesh, or global ones in a Model<2>)
   double cell_area = 0.0;  // reference area of the one cell that uses it [m^2]
 };
 

@@ -1,161 +1,74 @@
-// The assembled model: global node arrays, lumped masses and element blocks whose reference
-// geometry (shape-function gradients, volumes, hourglass vectors) is computed once.
+// The assembled model of either dimension, Model<D>: global node arrays, lumped masses, the
+// bodies' ranges and the element blocks whose reference geometry is computed once. What is the
+// same in 2D and 3D is written here once; the element blocks, which differ (the formulations,
+// their geometry and its lane layout), are the dimension's ModelBlocks<D>: blocks2.hpp (Q4, T3)
+// and blocks3.hpp (hexahedra, tetrahedra). DOFs are interleaved, DOF D i + k for component k of
+// node i.
 #pragma once
 
-#include <algorithm>
-#include <array>
 #include <cstddef>
-#include <string>
 #include <vector>
 
-#include "solver/elements/hourglass.hpp"
-#include "solver/materials/material.hpp"
-#include "solver/model/mesh.hpp"
+#include "solver/model/blocks2.hpp"
+#include "solver/model/blocks3.hpp"
 
 namespace ricochet {
 
-enum class QuadElement { full_2x2, one_point_hourglass };
-struct BodyInput {
-  std::string name;
-  Mesh mesh;
-  Material material;
-  QuadElement quad_element = QuadElement::full_2x2;
-  HourglassControl hourglass;
-  double thickness = 1.0;               // [m]
-  Vec2 initial_velocity = Vec2::Zero();  // [m/s]
-};
-
-using Grad4 = Eigen::Matrix<double, 4, 2>;  // rows = element nodes, cols = dN/dX, dN/dY [1/m]
-using Grad3 = Eigen::Matrix<double, 3, 2>;
-
-// Each geometry also lists its values as lane_value(k), 0 <= k < kLaneValues: the order in
-// which ElementBlock::lane_geom stores them for the vectorized force kernels.
-struct Q4FullGeom {
-  std::array<Grad4, 4> dndx;  // at the 2x2 Gauss points
-  std::array<double, 4> vol;  // Gauss weight * det J0 * thickness [m^3]
-  // Per point q: dN/dX (I, J) at 9q + 2I + J, the volume at 9q + 8.
-  static constexpr int kLaneValues = 36;
-  double lane_value(int k) const { return k % 9 == 8 ? vol[k / 9] : dndx[k / 9](k % 9 / 2, k % 9 % 2); }
-};
-struct Q4HourglassGeom {
-  Grad4 dndx;                  // mean (= centroid) gradients
-  Eigen::Vector4d gamma;       // FB hourglass vector, orthogonal to linear fields [-]
-  double vol = 0.0;            // A0 * thickness [m^3]
-  double hourglass_coeff = 0.0;  // c of HourglassControl: [kg/s] viscous or [N/m] stiffness
-  // dN/dX (I, J) at 2I + J, gamma_I at 8 + I, then the volume and c.
-  static constexpr int kLaneValues = 14;
-  double lane_value(int k) const {
-    return k < 8 ? dndx(k / 2, k % 2) : k < 12 ? gamma(k - 8) : k == 12 ? vol : hourglass_coeff;
-  }
-};
-struct T3Geom {
-  Grad3 dndx;
-  double vol = 0.0;  // A0 * thickness [m^3]
-  // dN/dX (I, J) at 2I + J, then the volume.
-  static constexpr int kLaneValues = 7;
-  double lane_value(int k) const { return k < 6 ? dndx(k / 2, k % 2) : vol; }
-};
-
-// One body's cells of one formulation. `first_cell` is the index of the block's first cell in
-// the global cell numbering (bodies in order; in each body its quads, then its triangles).
-template <int N, class Geom>
-struct ElementBlock {
-  int body = 0;
-  int first_cell = 0;
-  Material material;
-  std::vector<std::array<int, N>> conn;  // global node indices
-  std::vector<Geom> geom;
-  // The same cells in batches of kLanes, structure of arrays, for the vectorized force
-  // kernels (element_kernels.hpp). Batch k covers cells k kLanes ... k kLanes + kLanes - 1;
-  // the last batch is padded with copies of the last cell. In a batch's records
-  // (batch_conn, batch_geom) node I of lane l is at I kLanes + l and geometry value j
-  // (Geom::lane_value) of lane l at j kLanes + l. Made by pack_lanes().
-  std::vector<int> lane_conn;
-  std::vector<double> lane_geom;
-  std::size_t num_batches() const { return (conn.size() + kLanes - 1) / kLanes; }
-  const int* batch_conn(std::size_t k) const { return lane_conn.data() + k * N * kLanes; }
-  const double* batch_geom(std::size_t k) const { return lane_geom.data() + k * Geom::kLaneValues * kLanes; }
-};
-
-// Fills b.lane_conn and b.lane_geom from b.conn and b.geom.
-template <int N, class Geom>
-void pack_lanes(ElementBlock<N, Geom>& b) {
-  const std::size_t batches = b.num_batches();
-  b.lane_conn.assign(batches * N * kLanes, 0);
-  b.lane_geom.assign(batches * Geom::kLaneValues * kLanes, 0.0);
-  for (std::size_t k = 0; k < batches; ++k)
-    for (int l = 0; l < kLanes; ++l) {
-      const std::size_t e = std::min(k * kLanes + l, b.conn.size() - 1);
-      for (int i = 0; i < N; ++i) b.lane_conn[(k * N + i) * kLanes + l] = b.conn[e][i];
-      for (int j = 0; j < Geom::kLaneValues; ++j)
-        b.lane_geom[(k * Geom::kLaneValues + j) * kLanes + l] = b.geom[e].lane_value(j);
-    }
-}
-using Q4FullBlock = ElementBlock<4, Q4FullGeom>;
-struct Q4HourglassBlock : ElementBlock<4, Q4HourglassGeom> {
-  HourglassForm form = HourglassForm::viscous;
-};
-using T3Block = ElementBlock<3, T3Geom>;
-
-struct BodyInfo {
-  std::string name;
-  int first_node = 0, num_nodes = 0;
-  int first_cell = 0, num_cells = 0;
-  double thickness = 0.0;
-  QuadElement quad_element = QuadElement::full_2x2;
-  Material material;
-  std::vector<int> boundary_nodes;  // global indices of nodes on an edge used by one cell, sorted
-  std::vector<BoundaryEdge> boundary_edges;  // boundary_edges() of the body's mesh, global indices
-};
-
-// The model's element blocks by formulation, in the order every force pass visits them (and
-// so sums f_int): Q4 with hourglass control, Q4 2x2, T3.
-enum class BlockKind { q4_hourglass, q4_full, t3 };
-inline constexpr BlockKind kBlockKinds[] = {BlockKind::q4_hourglass, BlockKind::q4_full, BlockKind::t3};
-
-struct Model {
-  static constexpr int kDim = 2;  // coordinates per node (Model3: 3), for code written for both
-  PlaneMode plane = PlaneMode::stress;
-  Eigen::Matrix2Xd ref;         // 2 x n reference coordinates, all bodies [m]
-  Eigen::VectorXd mass;         // lumped mass per DOF (2n, x and y equal) [kg]
-  Eigen::VectorXd inv_mass;     // 1/mass per DOF [1/kg]
-  Eigen::VectorXd initial_velocity;  // per DOF [m/s]
-  Vec2 gravity = Vec2::Zero();  // body acceleration [m/s^2]
-  std::vector<BodyInfo> bodies;
-  std::vector<Q4FullBlock> q4_full;
-  std::vector<Q4HourglassBlock> q4_hourglass;
-  std::vector<T3Block> t3;
+template <int D>
+struct Model : ModelBlocks<D> {
+  static constexpr int kDim = D;                   // coordinates per node
+  Eigen::Matrix<double, D, Eigen::Dynamic> ref;    // D x n reference coordinates, all bodies [m]
+  Eigen::VectorXd mass;                            // lumped mass per DOF (D n, a node's equal) [kg]
+  Eigen::VectorXd inv_mass;                        // 1/mass per DOF [1/kg]
+  Eigen::VectorXd initial_velocity;                // per DOF [m/s]
+  Eigen::Matrix<double, D, 1> gravity = Eigen::Matrix<double, D, 1>::Zero();  // body acceleration [m/s^2]
+  std::vector<BodyInfo<D>> bodies;
   std::vector<double> cell_dt;  // per global cell: L_e / c_p, the critical-step estimate [s]
   double critical_dt = 0.0;     // min of cell_dt [s]
   int critical_cell = -1;
 
   int num_nodes() const { return static_cast<int>(ref.cols()); }
-  int num_dofs() const { return 2 * num_nodes(); }
+  int num_dofs() const { return D * num_nodes(); }
   int num_cells() const { return static_cast<int>(cell_dt.size()); }
-  std::size_t num_blocks(BlockKind kind) const {
-    return kind == BlockKind::q4_hourglass ? q4_hourglass.size() : kind == BlockKind::q4_full ? q4_full.size() : t3.size();
-  }
 };
 
 // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
-template <class Fn>
-void for_each_cell_block(const Model& model, Fn&& fn) {
-  for (const auto& b : model.q4_full) fn(b);
-  for (const auto& b : model.q4_hourglass) fn(b);
-  for (const auto& b : model.t3) fn(b);
+template <int D, class Fn>
+void for_each_cell_block(const Model<D>& model, Fn&& fn) {
+  model.for_each_cell_block(fn);
 }
 
-// Builds the model; throws std::invalid_argument for a cell with non-positive area or a
-// non-convex quadrilateral (naming the body and cell), or non-positive thickness/density.
-Model build_model(const std::vector<BodyInput>& bodies, PlaneMode plane, const Vec2& gravity);
+// Builds a 2D model: per body its nodes (after the previous bodies'), a block of its
+// quadrilaterals (2x2 points or one point, BodyInput<2>::quad_element) and one of its triangles,
+// the row-sum lumped masses and cell_dt = L_e / c_p of each cell. Throws std::invalid_argument
+// for a cell with non-positive area or a non-convex quadrilateral (naming the body and cell), or
+// non-positive thickness/density; naming the node for a node of no cell (zero mass).
+Model<2> build_model(const std::vector<BodyInput<2>>& bodies, PlaneMode plane, const Vec2& gravity);
 
-// Critical-step estimates of one reference cell (docs/background.md, Critical time step): Q4 uses
-// L_e = sqrt(2) A / sqrt(d13^2 + d24^2) (Flanagan-Belytschko bound, diagonals d13, d24);
-// T3 uses the analogous bound of the lumped constant-strain triangle,
-// L_e = sqrt(2/3) 2 A / sqrt(eig_max(sum over edges e e^T)) (a/sqrt(3) for an equilateral
-// triangle of side a; the smallest altitude, 2 A / longest edge, overestimates the stable
-// step by up to 27 %). [m]
-double q4_characteristic_length(const Eigen::Matrix<double, 2, 4>& x);
-double t3_characteristic_length(const Eigen::Matrix<double, 2, 3>& x);
+// Builds a 3D model: per body its nodes, a block of its hexahedra (2x2x2 or one point,
+// BodyInput<3>::hex_element) and one of its tetrahedra, the row-sum lumped masses
+// (hex8_lumped_masses, tet4_lumped_masses), cell_dt = L_e / c_p of each cell
+// (hex8_characteristic_length, tet4_characteristic_length: the bound of docs/three-dimensions.md,
+// Elements in 3D). Throws std::invalid_argument naming the body and the cell (its index in the
+// body's mesh, Mesh3 numbering) for a hexahedron of corner quality <= 0 (hex_corner_quality(),
+// folded or inverted) or with det J <= 0 at a Gauss point, a tetrahedron of volume <= 0, and
+// naming the body for a density or wave speed that is not > 0; naming the node for a node of no
+// cell (zero mass).
+Model<3> build_model(const std::vector<BodyInput<3>>& bodies, const Vec3& gravity);
+
+// The reference corners of cell e of a 3D block [m], 3 x N (column a = corner a).
+template <int N, class Layout>
+Nodes3<N> cell_corners(const Model<3>& model, const ElementBlock3<N, Layout>& b, std::size_t e) {
+  Nodes3<N> x;
+  for (int a = 0; a < N; ++a) x.col(a) = model.ref.col(b.conn[e][a]);
+  return x;
+}
+
+// element3d.hpp's geometry of cell e, rebuilt by its builders from the reference corners (the
+// same bits the model was built from; a 3D block stores the lane form only). For the element
+// matrices of the implicit scheme and for tests.
+Hex8Geom cell_geometry(const Model<3>& model, const Hex8Block& b, std::size_t e);
+Hex8OnePointGeom cell_geometry(const Model<3>& model, const Hex8OnePointBlock& b, std::size_t e);
+Tet4Geom cell_geometry(const Model<3>& model, const Tet4Block& b, std::size_t e);
 
 }  // namespace ricochet

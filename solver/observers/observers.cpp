@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 
@@ -32,10 +32,10 @@ Eigen::Matrix<double, M::kDim, 1> linear_momentum(const M& model, const State& s
   return p;
 }
 
-template Energies observe_energies<Model>(const Model&, const State&, const Eigen::VectorXd&);
-template Vec2 linear_momentum<Model>(const Model&, const State&);
-template Energies observe_energies<Model3>(const Model3&, const State&, const Eigen::VectorXd&);
-template Vec3 linear_momentum<Model3>(const Model3&, const State&);
+template Energies observe_energies<Model<2>>(const Model<2>&, const State&, const Eigen::VectorXd&);
+template Vec2 linear_momentum<Model<2>>(const Model<2>&, const State&);
+template Energies observe_energies<Model<3>>(const Model<3>&, const State&, const Eigen::VectorXd&);
+template Vec3 linear_momentum<Model<3>>(const Model<3>&, const State&);
 
 double energy_error(const Energies& e, double initial_energy, double reference_energy) {
   if (!(reference_energy > 0.0)) return 0.0;

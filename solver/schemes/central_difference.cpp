@@ -2,7 +2,7 @@
 
 #include <omp.h>
 
-#include "solver/forces/internal_forces3.hpp"
+#include "solver/forces/internal_forces.hpp"
 
 namespace ricochet {
 namespace {
@@ -125,11 +125,11 @@ void update(State& s) {
 }
 
 // The instantiations: one per model type.
-template State initial_state<Model>(const Model&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
+template State initial_state<Model<2>>(const Model<2>&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
                                     const std::vector<NodalLoad>&);
-template void evaluate<Model>(const Model&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
-template State initial_state<Model3>(const Model3&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
+template void evaluate<Model<2>>(const Model<2>&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
+template State initial_state<Model<3>>(const Model<3>&, const std::vector<PrescribedDof>&, double, const Eigen::VectorXd&,
                                      const std::vector<NodalLoad>&);
-template void evaluate<Model3>(const Model3&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
+template void evaluate<Model<3>>(const Model<3>&, const std::vector<PrescribedDof>&, State&, bool, const StressTracking*);
 
 }  // namespace ricochet

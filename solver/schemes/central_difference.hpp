@@ -21,7 +21,7 @@ namespace ricochet {
 // Allocates the state: u_0 = initial_displacement (or 0) with prescribed displacements
 // imposed, v_0 = the model's initial velocities with prescribed velocities imposed, and the
 // nodal loads.
-// M is the model type (Model, 2D; its dimension M::kDim sets the DOFs per node).
+// M is the model type (Model<2>, 2D; its dimension M::kDim sets the DOFs per node).
 template <class M>
 State initial_state(const M& model, const std::vector<PrescribedDof>& prescribed, double dt,
                     const Eigen::VectorXd& initial_displacement = {},
@@ -44,7 +44,7 @@ void update(State& s);
 
 // Fixed-step estimate: safety * min over cells of L_e / c_p (docs/background.md, Critical time
 // step). [s]
-inline double stable_time_step(const Model& model, double safety) {
+inline double stable_time_step(const Model<2>& model, double safety) {
   return safety * model.critical_dt;
 }
 

@@ -113,7 +113,7 @@ RunResult run_explicit(const M& model, const RunSettings& settings, const Progre
   return result;
 }
 
-template RunResult run_explicit<Model>(const Model&, const RunSettings&, const ProgressFn&);
-template RunResult run_explicit<Model3>(const Model3&, const RunSettings&, const ProgressFn&);
+template RunResult run_explicit<Model<2>>(const Model<2>&, const RunSettings&, const ProgressFn&);
+template RunResult run_explicit<Model<3>>(const Model<3>&, const RunSettings&, const ProgressFn&);
 
 }  // namespace ricochet

@@ -6,7 +6,7 @@
 
 namespace ricochet {
 
-// M is the model type (Model: 2D), instantiated in explicit.cpp.
+// M is the model type (Model<2>: 2D), instantiated in explicit.cpp.
 template <class M>
 RunResult run_explicit(const M& model, const RunSettings& settings, const ProgressFn& progress = {});
 

@@ -16,8 +16,8 @@ namespace {
 
 // The thickness of a body in internal_force_roundoff whose largest cell size is `size` [m]:
 // the body's thickness in 2D, the cell size in 3D.
-inline double roundoff_thickness(const BodyInfo& b, double) { return b.thickness; }
-inline double roundoff_thickness(const BodyInfo3&, double size) { return size; }
+inline double roundoff_thickness(const BodyInfo<2>& b, double) { return b.thickness; }
+inline double roundoff_thickness(const BodyInfo<3>&, double size) { return size; }
 
 // The round-off floor of the internal nodal forces [N]: a cell's stress carries an error of
 // about eps (lambda + 2 mu) from the cancellation in E = (F^T F - I)/2 near F = I, and its
@@ -603,9 +603,9 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   return result;
 }
 
-template class ImplicitIntegratorT<Model>;
-template class ImplicitIntegratorT<Model3>;
-template RunResult run_implicit<Model>(const Model&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
-template RunResult run_implicit<Model3>(const Model3&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
+template class ImplicitIntegratorT<Model<2>>;
+template class ImplicitIntegratorT<Model<3>>;
+template RunResult run_implicit<Model<2>>(const Model<2>&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
+template RunResult run_implicit<Model<3>>(const Model<3>&, const RunSettings&, const ImplicitSettings&, const ProgressFn&);
 
 }  // namespace ricochet

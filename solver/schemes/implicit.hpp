@@ -98,9 +98,9 @@ class ImplicitIntegratorT {
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 
-using ImplicitIntegrator = ImplicitIntegratorT<Model>;
+using ImplicitIntegrator = ImplicitIntegratorT<Model<2>>;
 
-// Instantiated for Model and Model3 (implicit.cpp).
+// Instantiated for Model<2> and Model<3> (implicit.cpp).
 template <class M>
 RunResult run_implicit(const M& model, const RunSettings& settings, const ImplicitSettings& implicit,
                        const ProgressFn& progress = {});

@@ -198,15 +198,15 @@ bool relax_displacement(const M& model, const RunSettings& settings, Eigen::Vect
 }
 
 // The instantiations: one per model type.
-template double relaxation_step<Model>(const Model&, const RunSettings&, bool);
-template class RelaxationT<Model>;
-template bool relax_explicit_start<Model>(const Model&, const RunSettings&, RelaxationContactT<2>, State&,
+template double relaxation_step<Model<2>>(const Model<2>&, const RunSettings&, bool);
+template class RelaxationT<Model<2>>;
+template bool relax_explicit_start<Model<2>>(const Model<2>&, const RunSettings&, RelaxationContactT<2>, State&,
                                           RelaxationReport&);
-template bool relax_displacement<Model>(const Model&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
-template double relaxation_step<Model3>(const Model3&, const RunSettings&, bool);
-template class RelaxationT<Model3>;
-template bool relax_explicit_start<Model3>(const Model3&, const RunSettings&, RelaxationContactT<3>, State&,
+template bool relax_displacement<Model<2>>(const Model<2>&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
+template double relaxation_step<Model<3>>(const Model<3>&, const RunSettings&, bool);
+template class RelaxationT<Model<3>>;
+template bool relax_explicit_start<Model<3>>(const Model<3>&, const RunSettings&, RelaxationContactT<3>, State&,
                                            RelaxationReport&);
-template bool relax_displacement<Model3>(const Model3&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
+template bool relax_displacement<Model<3>>(const Model<3>&, const RunSettings&, Eigen::VectorXd&, RelaxationReport&);
 
 }  // namespace ricochet

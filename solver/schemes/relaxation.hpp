@@ -108,6 +108,6 @@ bool relax_displacement(const M& model, const RunSettings& settings, Eigen::Vect
                         RelaxationReport& report);
 
 using RelaxationContact = RelaxationContactT<2>;
-using Relaxation = RelaxationT<Model>;
+using Relaxation = RelaxationT<Model<2>>;
 
 }  // namespace ricochet

@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "solver/forces/internal_forces3.hpp"
+#include "solver/forces/internal_forces.hpp"
 #include "solver/observers/observers.hpp"
 
 namespace ricochet {
@@ -525,7 +525,7 @@ void RunMonitorT<M>::finish(const State& s) {
     result_.contact.sweeps_mean = static_cast<double>(c.iterations_total) / c.steps_with_contact;
 }
 
-template class RunMonitorT<Model>;
-template class RunMonitorT<Model3>;
+template class RunMonitorT<Model<2>>;
+template class RunMonitorT<Model<3>>;
 
 }  // namespace ricochet

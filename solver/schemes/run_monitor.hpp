@@ -28,7 +28,7 @@ struct MonitorSpace<3> {
   static Vec3 zero_angular() { return Vec3::Zero(); }
 };
 
-// M is the model type (Model in 2D).
+// M is the model type (Model<2> in 2D).
 template <class M>
 class RunMonitorT {
  public:
@@ -128,6 +128,6 @@ class RunMonitorT {
   std::chrono::steady_clock::time_point wall0_;
   std::clock_t cpu0_;
 };
-using RunMonitor = RunMonitorT<Model>;
+using RunMonitor = RunMonitorT<Model<2>>;
 
 }  // namespace ricochet

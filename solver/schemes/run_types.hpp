@@ -10,7 +10,7 @@
 
 #include "solver/contact/contact_set.hpp"
 #include "solver/materials/stress.hpp"
-#include "solver/model/model3.hpp"
+#include "solver/model/model.hpp"
 
 namespace ricochet {
 
@@ -81,7 +81,7 @@ struct RunSettings {
   // scheme); the implicit scheme by its condensed bi-potential problem.
   enum class ContactMethod { bipotential, penalty };
   std::vector<Obstacle> obstacles;
-  std::vector<Obstacle3> obstacles3;  // the same for a 3D model (Model3)
+  std::vector<Obstacle3> obstacles3;  // the same for a 3D model (Model<3>)
   std::vector<std::vector<double>> friction;
   // Contact between bodies, node to segment (body_contact.hpp), treated by the same method.
   std::vector<BodyPair> body_pairs;
@@ -97,8 +97,8 @@ struct RunSettings {
 };
 
 // The rigid obstacles of a run, of the model type's dimension (2D: RunSettings::obstacles).
-inline const std::vector<Obstacle>& obstacles_of(const RunSettings& s, const Model&) { return s.obstacles; }
-inline const std::vector<Obstacle3>& obstacles_of(const RunSettings& s, const Model3&) { return s.obstacles3; }
+inline const std::vector<Obstacle>& obstacles_of(const RunSettings& s, const Model<2>&) { return s.obstacles; }
+inline const std::vector<Obstacle3>& obstacles_of(const RunSettings& s, const Model<3>&) { return s.obstacles3; }
 
 enum class RunStatus { ok, diverged };
 

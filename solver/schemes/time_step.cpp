@@ -138,7 +138,7 @@ void smallest_in(const T3Block& b, int e0, int e1, double inv_c2, const double* 
 
 // The 2D model's cells. (Each model type has its own: the squared forms are the cell types'.)
 template <>
-double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
+double StepControlT<Model<2>>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
   // The smallest cell in squared form over every block (no square root per quad), then its
   // step from the same functions as model.critical_dt, so that the undeformed configuration
   // gives model.critical_dt bit for bit. On the run's threads when asked: each takes a share
@@ -246,7 +246,7 @@ double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool p
 // hexahedron's length needs its masses and gradients, so it is computed once per cell. Only
 // every dt_update_interval steps.
 template <>
-double StepControlT<Model3>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
+double StepControlT<Model<3>>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const {
   Smallest best;
   auto part_of = [&](int part, int parts, Smallest& mine) {
     auto blocks = [&](const auto& list, const std::vector<double>& speed) {
@@ -335,9 +335,9 @@ void StepControlT<M>::report(RunResult& r) const {
 }
 
 // The instantiations: one per model type.
-template double critical_time_step<Model>(const Model&, const RunSettings&, double*);
-template class StepControlT<Model>;
-template double critical_time_step<Model3>(const Model3&, const RunSettings&, double*);
-template class StepControlT<Model3>;
+template double critical_time_step<Model<2>>(const Model<2>&, const RunSettings&, double*);
+template class StepControlT<Model<2>>;
+template double critical_time_step<Model<3>>(const Model<3>&, const RunSettings&, double*);
+template class StepControlT<Model<3>>;
 
 }  // namespace ricochet

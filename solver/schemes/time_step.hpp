@@ -78,9 +78,9 @@ class StepControlT {
 };
 
 template <>
-double StepControlT<Model>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
+double StepControlT<Model<2>>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
 template <>
-double StepControlT<Model3>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
-using StepControl = StepControlT<Model>;
+double StepControlT<Model<3>>::critical(const Eigen::VectorXd& u, int* cell, bool parallel) const;
+using StepControl = StepControlT<Model<2>>;
 
 }  // namespace ricochet

@@ -28,7 +28,7 @@ namespace ricochet {
 // `kind`, with its material's own type (the constant is false for the blocks without
 // hourglass control).
 template <class Fn>
-void visit_block(const Model& model, BlockKind kind, std::size_t k, Fn&& fn) {
+void visit_block(const Model<2>& model, BlockKind kind, std::size_t k, Fn&& fn) {
   switch (kind) {
     case BlockKind::q4_hourglass: {
       const Q4HourglassBlock& b = model.q4_hourglass[k];
@@ -53,7 +53,7 @@ void visit_block(const Model& model, BlockKind kind, std::size_t k, Fn&& fn) {
 
 // visit_block for every element block, in the order every pass sums f_int (kBlockKinds).
 template <class Fn>
-void for_each_block(const Model& model, Fn&& fn) {
+void for_each_block(const Model<2>& model, Fn&& fn) {
   for (const BlockKind kind : kBlockKinds)
     for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
 }
@@ -70,6 +70,16 @@ struct DirectScatter {
 };
 struct ElementStore {
   double* out;  // this block's first cell's entries
+  static constexpr int kStride = 1;  // from an entry's x to its y
+  // Cell e's node i's x among its block's entries; the entries of `cells` cells.
+  template <int N>
+  static constexpr std::size_t entry(std::size_t e, int i) {
+    return 2 * N * e + 2 * i;
+  }
+  template <int N>
+  static constexpr std::size_t size(std::size_t cells) {
+    return 2 * N * cells;
+  }
   template <int N>
   EIGEN_ALWAYS_INLINE void put(std::size_t e, const std::array<int, N>&, const Eigen::Matrix<double, N, 2>& fe) const {
     double* o = out + 2 * N * e;
@@ -78,6 +88,15 @@ struct ElementStore {
       o[2 * i + 1] = fe(i, 1);
     }
   }
+};
+
+// The 2D force pass's outputs (internal_forces.cpp). On one thread the threaded pass stores and
+// gathers as on several, so that its forces are the same bits whatever the number of threads.
+template <>
+struct ForceOutput<2> {
+  using Scatter = DirectScatter;
+  using Store = ElementStore;
+  static constexpr bool kScatterOnOneThread = false;
 };
 
 // The element kernels: element_kernel<kViscous>(block, material, u, v, out, pass, t, e0, e1)
@@ -440,6 +459,35 @@ template <bool kViscous, class Pass, class Mat, class Out>
   t.hourglass_power += hg_power;
   t.min_jacobian = *std::min_element(min_j, min_j + kLanes);
   pass.finish(t);
+}
+
+// Calls fn(global cell, the values of its integration points, their reference volumes [m^3],
+// the number of points) for every cell: point(material, F, P, det F) with F at the point and
+// P = mat.first_piola(F). For the stress passes of internal_forces.cpp. The one-point cells
+// (Q4 with hourglass control, T3) first, then the Q4 with 2x2 points.
+template <class Point, class Fn>
+void for_each_cell_points(const Model<2>& model, const double* u, Point&& point, Fn&& fn) {
+  for (const BlockKind kind : {BlockKind::q4_hourglass, BlockKind::t3, BlockKind::q4_full})
+    for (std::size_t k = 0; k < model.num_blocks(kind); ++k)
+      visit_block(model, kind, k, [&](const auto& b, const auto& mat, auto) {
+        constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
+        for (std::size_t e = 0; e < b.conn.size(); ++e) {
+          const int cell = b.first_cell + static_cast<int>(e);
+          if constexpr (std::is_same_v<std::decay_t<decltype(b)>, Q4FullBlock>) {
+            const Grad4 ue = gather<4>(u, b.conn[e]);
+            std::array<decltype(point(mat, Mat2(), Mat2(), 1.0)), 4> values;
+            for (int q = 0; q < 4; ++q) {
+              const Mat2 F = deformation_gradient<4>(ue, b.geom[e].dndx[q]);
+              values[q] = point(mat, F, mat.first_piola(F), F.determinant());
+            }
+            fn(cell, values.data(), b.geom[e].vol.data(), 4);
+          } else {
+            const Mat2 F = deformation_gradient<N>(gather<N>(u, b.conn[e]), b.geom[e].dndx);
+            const auto value = point(mat, F, mat.first_piola(F), F.determinant());
+            fn(cell, &value, &b.geom[e].vol, 1);
+          }
+        }
+      });
 }
 
 }  // namespace ricochet

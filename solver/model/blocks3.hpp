@@ -1,17 +1,14 @@
-// The assembled 3D model (docs/three-dimensions.md, "The 3D model and force pass"): global node
-// arrays, lumped masses and element blocks whose reference geometry is computed once, with the
-// shape and the names of the 2D Model (model.hpp) wherever the meaning is the same, so that code
-// written for either (the scheme loops, as templates) reads both: ref, mass, inv_mass,
-// initial_velocity, gravity, bodies, cell_dt, critical_dt, critical_cell, num_nodes(),
-// num_dofs(), num_cells(), kDim. DOFs are interleaved, (x0, y0, z0, x1, ...), DOF 3 i + k.
+// The 3D element blocks of a Model<3> (model.hpp; docs/three-dimensions.md, "The 3D model and
+// force pass"): what a body asks for (BodyInput<3>), what the model keeps of it (BodyInfo<3>),
+// and per formulation (hexahedra with 2x2x2 points, one-point hexahedra with hourglass control,
+// tetrahedra) the lane layout of the reference geometry for the vectorized force kernels
+// (forces/element_kernels3.hpp). DOFs are interleaved, (x0, y0, z0, x1, ...), DOF 3 i + k.
 //
-// The element kernels of one cell are element3d.hpp's; the force pass (internal_forces3.hpp)
-// runs them on kLanes cells at once from each block's structure-of-arrays copy (lane_conn,
-// lane_geom), in the arithmetic of element_kernels3.hpp. A block keeps its geometry in that
+// The element kernels of one cell are element3d.hpp's. A block keeps its geometry in the lane
 // copy only (a Hex8Geom is 1.6 kB a cell, its lane form 640 B): the geometry of element3d.hpp
 // for one cell, e.g. for an element matrix, is rebuilt from the reference coordinates by
-// cell_geometry() below, with the builders' own arithmetic, so bit for bit what the model was
-// built from.
+// cell_geometry() (model.hpp), with the builders' own arithmetic, so bit for bit what the model
+// was built from. The 2D counterparts: blocks2.hpp.
 #pragma once
 
 #include <array>
@@ -20,15 +17,23 @@
 #include <vector>
 
 #include "solver/elements/element3d.hpp"
+#include "solver/elements/hourglass.hpp"
 #include "solver/materials/material3d.hpp"
 #include "solver/model/mesh3.hpp"
-#include "solver/model/model.hpp"  // HourglassControl, HourglassForm (shared with 2D), kLanes
 
 namespace ricochet {
 
+template <int D>
+struct BodyInput;
+template <int D>
+struct BodyInfo;
+template <int D>
+struct ModelBlocks;
+
 enum class HexElement { full_2x2x2, one_point_hourglass };
 
-struct BodyInput3 {
+template <>
+struct BodyInput<3> {
   std::string name;
   Mesh3 mesh;
   Material3 material;
@@ -37,7 +42,8 @@ struct BodyInput3 {
   Vec3 initial_velocity = Vec3::Zero();  // [m/s]
 };
 
-struct BodyInfo3 {
+template <>
+struct BodyInfo<3> {
   std::string name;
   int first_node = 0, num_nodes = 0;
   int first_cell = 0, num_cells = 0;
@@ -114,65 +120,28 @@ using Tet4Block = ElementBlock3<4, Tet4Lanes>;
 enum class BlockKind3 { hex8_hourglass, hex8_full, tet4 };
 inline constexpr BlockKind3 kBlockKinds3[] = {BlockKind3::hex8_hourglass, BlockKind3::hex8_full, BlockKind3::tet4};
 
-struct Model3 {
-  static constexpr int kDim = 3;
-  Eigen::Matrix3Xd ref;              // 3 x n reference coordinates, all bodies [m]
-  Eigen::VectorXd mass;              // lumped mass per DOF (3n, x, y and z equal) [kg]
-  Eigen::VectorXd inv_mass;          // 1/mass per DOF [1/kg]
-  Eigen::VectorXd initial_velocity;  // per DOF [m/s]
-  Vec3 gravity = Vec3::Zero();       // body acceleration [m/s^2]
-  std::vector<BodyInfo3> bodies;
+
+template <>
+struct ModelBlocks<3> {
   std::vector<Hex8OnePointBlock> hex8_hourglass;
   std::vector<Hex8Block> hex8_full;
   std::vector<Tet4Block> tet4;
-  std::vector<double> cell_dt;  // per global cell: L_e / c_p, the critical-step estimate [s]
-  double critical_dt = 0.0;     // min of cell_dt [s]
-  int critical_cell = -1;
 
-  int num_nodes() const { return static_cast<int>(ref.cols()); }
-  int num_dofs() const { return 3 * num_nodes(); }
-  int num_cells() const { return static_cast<int>(cell_dt.size()); }
+  using Kind = BlockKind3;
+  static constexpr const BlockKind3 (&kKinds)[3] = kBlockKinds3;
   std::size_t num_blocks(BlockKind3 kind) const {
     return kind == BlockKind3::hex8_hourglass ? hex8_hourglass.size()
            : kind == BlockKind3::hex8_full    ? hex8_full.size()
                                               : tet4.size();
   }
+  // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
+  template <class Fn>
+  void for_each_cell_block(Fn&& fn) const {
+    for (const auto& b : hex8_full) fn(b);
+    for (const auto& b : hex8_hourglass) fn(b);
+    for (const auto& b : tet4) fn(b);
+  }
 };
-
-// fn(block) for every element block (conn, first_cell, body), whatever its formulation (the
-// 2D for_each_cell_block of model.hpp).
-template <class Fn>
-void for_each_cell_block(const Model3& model, Fn&& fn) {
-  for (const auto& b : model.hex8_full) fn(b);
-  for (const auto& b : model.hex8_hourglass) fn(b);
-  for (const auto& b : model.tet4) fn(b);
-}
-
-// Builds the model: per body its nodes (after the previous bodies'), a block of its hexahedra
-// (2x2x2 or one point, BodyInput3::hex_element) and one of its tetrahedra, the row-sum lumped
-// masses (hex8_lumped_masses, tet4_lumped_masses), cell_dt = L_e / c_p of each cell
-// (hex8_characteristic_length, tet4_characteristic_length: the bound of docs/three-dimensions.md,
-// Elements in 3D). Throws std::invalid_argument naming the body and the cell (its index in the
-// body's mesh, Mesh3 numbering) for a hexahedron of corner quality <= 0 (hex_corner_quality(),
-// folded or inverted) or with det J <= 0 at a Gauss point, a tetrahedron of volume <= 0, and
-// naming the body for a density or wave speed that is not > 0; naming the node for a node of no
-// cell (zero mass).
-Model3 build_model3(const std::vector<BodyInput3>& bodies, const Vec3& gravity);
-
-// The reference corners of cell e of a block [m], 3 x N (column a = corner a).
-template <int N, class Layout>
-Nodes3<N> cell_corners(const Model3& model, const ElementBlock3<N, Layout>& b, std::size_t e) {
-  Nodes3<N> x;
-  for (int a = 0; a < N; ++a) x.col(a) = model.ref.col(b.conn[e][a]);
-  return x;
-}
-
-// element3d.hpp's geometry of cell e, rebuilt by its builders from the reference corners (the
-// same bits the model was built from; the block stores the lane form only). For the element
-// matrices of the implicit scheme and for tests.
-Hex8Geom cell_geometry(const Model3& model, const Hex8Block& b, std::size_t e);
-Hex8OnePointGeom cell_geometry(const Model3& model, const Hex8OnePointBlock& b, std::size_t e);
-Tet4Geom cell_geometry(const Model3& model, const Tet4Block& b, std::size_t e);
 
 // The monomials of the trilinear hexahedron's Walsh-Hadamard coefficients (element_kernels3.hpp):
 // m = 0..7 is 1, xi, eta, zeta, eta zeta, xi zeta, xi eta, xi eta zeta (4 + alpha: the hourglass
