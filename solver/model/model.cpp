@@ -38,8 +38,7 @@ void add_cell_masses(Model<D>& model, int node0, const Cell& c, const Masses& ma
 }
 
 // A body's range and boundary in global numbering.
-BodyInfo<2> body_info(const BodyInput<2>& in, int bi, int node0, int cell0) {
-  (void)bi;
+BodyInfo<2> body_info(const BodyInput<2>& in, int node0, int cell0) {
   const Mesh& m = in.mesh;
   if (!(in.thickness > 0.0)) throw std::invalid_argument("body '" + in.name + "': thickness must be > 0");
   std::vector<BoundaryEdge> edges = boundary_edges(m);
@@ -51,8 +50,7 @@ BodyInfo<2> body_info(const BodyInput<2>& in, int bi, int node0, int cell0) {
           in.quad_element, in.material, edge_nodes(edges), std::move(edges)};
 }
 
-BodyInfo<3> body_info(const BodyInput<3>& in, int bi, int node0, int cell0) {
-  (void)bi;
+BodyInfo<3> body_info(const BodyInput<3>& in, int node0, int cell0) {
   const Mesh3& m = in.mesh;
   std::vector<BoundaryFace> faces = boundary_faces(m);
   for (BoundaryFace& f : faces) {
@@ -80,7 +78,7 @@ void assemble(Model<D>& model, const std::vector<BodyInput<D>>& inputs, Cells&& 
   for (int bi = 0; bi < static_cast<int>(inputs.size()); ++bi) {
     const BodyInput<D>& in = inputs[bi];
     const auto& m = in.mesh;
-    model.bodies.push_back(body_info(in, bi, node0, cell0));
+    model.bodies.push_back(body_info(in, node0, cell0));
     const double rho = material_density(in.material);
     const double cp = material_wave_speed(in.material);
     if (!(rho > 0.0)) throw std::invalid_argument("body '" + in.name + "': density must be > 0");
