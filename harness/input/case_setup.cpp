@@ -590,7 +590,7 @@ void prepare_run(PreparedCase& p, M& model) {
   if (s.penalty.soft_scale > 0.0) s.penalty.soft_dt = p.dt_auto() ? c.dt_safety * model.critical_dt : *c.dt;
   // The automatic step: safety x the solver's critical step, which with penalty contact is the
   // combined limit of elements and springs (min(dt_e, dt_p) alone is not stable when the two
-  // are close: tests/test_penalty_contact.cpp).
+  // are close: tests/solver/contact/test_penalty_contact.cpp).
   // It also gives the springs' own limit, which the summary reports for fixed steps too.
   const double critical = critical_time_step(model, s, &p.penalty_critical_dt);
   s.dt = p.dt_auto() ? c.dt_safety * critical : *c.dt;

@@ -54,7 +54,7 @@ Mesh3 make_box(const BoxSpec& spec);
 // mirror-symmetric about its three central planes to the last bit. The core's size and bulge
 // (those of the disk) keep every hexahedron's corner quality (hex_corner_quality) above 0.28 for
 // n = 1 .. 40 (the worst at n = 2, whose blocks have one layer), above 0.45 for n >= 4 and above
-// 0.65 for n >= 8 (tests/test_mesh3.cpp). Hexahedra only: the 6-tetrahedra split of the box needs a mesh whose
+// 0.65 for n >= 8 (tests/solver/model/test_mesh3.cpp). Hexahedra only: the 6-tetrahedra split of the box needs a mesh whose
 // cells cut shared faces alike, which the blocks' turned grids do not give.
 // Node sets: "boundary" (the sphere's nodes), "all", "center" (n even), and the sphere's extreme
 // nodes "leftmost", "rightmost", "lowest", "highest", "backmost", "frontmost" (x, y, z min and max:
@@ -69,7 +69,7 @@ Mesh3 make_ball(const BallSpec& spec);
 // The 2D mesh (a generator's or a Gmsh file's) extruded through z in [0, thickness] in `layers`
 // equal layers: node n of the 2D mesh at layer l (z = thickness l / layers) has index
 // l num_nodes + n; cells layer by layer. z starts at 0 as the box's does with origin z = 0, so the
-// extruded rectangle is the box (same nodes, cells and node sets: tests/test_mesh3.cpp).
+// extruded rectangle is the box (same nodes, cells and node sets: tests/solver/model/test_mesh3.cpp).
 // - A quadrilateral becomes a hexahedron: (a, b, c, d) at layer l, then at l + 1.
 // - A triangle's prism becomes 3 tetrahedra (no wedge elements): with its 2D node indices sorted
 //   a < b < c, each side face is cut along the diagonal from the lower index's node at z_l to the

@@ -11,7 +11,7 @@
 //
 // |.| of a tangential part is std::hypot: no overflow or underflow of the squares (a tangential
 // part of 1e-200 or 1e200 keeps its length), and hypot(a, 0) = |a| exactly, so a problem whose
-// tangential data lie along one tangent gives the 2D functions' numbers (tests/test_coulomb3d.cpp).
+// tangential data lie along one tangent gives the 2D functions' numbers (tests/solver/contact/test_coulomb3d.cpp).
 // Pure functions on fixed-size Eigen types: no state, no heap allocation.
 #pragma once
 
@@ -95,7 +95,7 @@ inline LocalPair3d closed_form_reaction_3d(const LocalPair3d& x_free, double w, 
 // The same functions without the `_3d` suffix, overloaded on LocalPair3d, so that code templated
 // over the dimension calls project_coulomb(r, mu), bipotential_update(r, x, w, mu, rho), ... for a
 // 2D LocalPair (coulomb.hpp) and a 3D LocalPair3d alike. Each forwards to its `_3d` function, so
-// the results are those bit for bit (tests/test_obstacles3.cpp). No call of the 2D functions
+// the results are those bit for bit (tests/solver/contact/test_obstacles3.cpp). No call of the 2D functions
 // changes: a braced pair such as {1.0, 0.3} cannot initialize a LocalPair3d (its tangential part,
 // an Eigen vector, has no implicit conversion from a number), so it still picks the 2D overload.
 // Only an empty {} would fit both: write LocalPair{} or LocalPair3d{} there.

@@ -120,7 +120,7 @@ double penalty_critical_dt(const M& model, const PenaltyContactT<M::kDim>& p);
 //   dt_c = 1 / sqrt(1 / dt_e^2 + 1 / dt_p^2),  dt_e = model.critical_dt, dt_p = penalty_critical_dt.
 // The springs only add stiffness, so omega_max^2 <= omega_e^2 + omega_p^2 (Weyl), and with
 // dt_e and dt_p both bounds dt_c is one too. min(dt_e, dt_p) is not: near dt_e = dt_p the
-// coupled system is up to sqrt(2) faster (see tests/test_penalty_contact.cpp, PenaltyTimeStep).
+// coupled system is up to sqrt(2) faster (see tests/solver/contact/test_penalty_contact.cpp, PenaltyTimeStep).
 template <class M>
 double penalty_combined_critical_dt(const M& model, const PenaltyContactT<M::kDim>& p) {
   return combined_critical_dt(model.critical_dt, penalty_critical_dt(model, p));

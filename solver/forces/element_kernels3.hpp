@@ -10,7 +10,7 @@
 // its sums in a fixed order ((p0 + p1) + (p2 + p3) and p0 + (p1 + p2); Eigen picks its own order
 // and fused multiply-adds, so the two agree to round-off). The hexahedra reorganize the
 // arithmetic, to fewer operations and less geometry, into the exact same formulas (equal to
-// element3d.hpp to round-off; tests/test_internal_forces3.cpp):
+// element3d.hpp to round-off; tests/solver/forces/test_internal_forces3.cpp):
 //
 // - The trilinear field u = sum_a N_a u_a in the monomials 1, xi, eta, zeta, eta zeta, xi zeta,
 //   xi eta, xi eta zeta (kHexMonomialSigns): u = 1/8 sum_m c_m m(xi), c_m = sum_a s_am u_a, the

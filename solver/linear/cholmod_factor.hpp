@@ -18,7 +18,7 @@
 // at a recycling allocator: a freed block is kept in a list for its exact size and handed back
 // on the next request of that size. The numeric phase of a fixed pattern asks for the same
 // sizes every time, so after analyze()'s warm-up factorize() and solve() of the simplicial
-// method (the implicit scheme's) take no memory from the heap (tests/test_cholmod_factor.cpp
+// method (the implicit scheme's) take no memory from the heap (tests/solver/linear/test_cholmod_factor.cpp
 // and ImplicitStepsDoNotAllocate count it); the supernodal method still allocates. The kept
 // blocks (a few times the size of L) are returned to the heap only at process exit.
 //

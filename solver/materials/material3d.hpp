@@ -12,7 +12,7 @@
 //   double density             reference mass density rho [kg/m^3]
 // F is the 3x3 deformation gradient, det F > 0. The strain-energy functions are exactly those
 // the 2D laws use (their 3D forms, in the comments of material.hpp): the 2D plane-strain law is
-// the 3D law restricted to F = diag(F2, 1), tested in tests/test_hyperelastic3d.cpp.
+// the 3D law restricted to F = diag(F2, 1), tested in tests/solver/materials/test_hyperelastic3d.cpp.
 //
 // Notation of the comments: C = F^T F, b = F F^T, E = (C - I)/2, J = det F, H = cof F = J F^-T,
 // G = F^-T, I1 = tr C = |F|^2, I2 = ((tr C)^2 - tr C^2)/2 = |cof F|^2, delta the identity.

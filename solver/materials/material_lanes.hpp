@@ -6,7 +6,7 @@
 // product F S with FMA instructions (F S)_ij = fma(F_i1, S_1j, F_i0 S_0j) on a CPU that has
 // them, whatever -ffp-contract says, so the lane code calls std::fma there. On such a CPU
 // std::fma is one instruction and the loops vectorize; the tests compare both paths
-// (tests/test_element_lanes.cpp).
+// (tests/solver/forces/test_element_lanes.cpp).
 //
 // St Venant-Kirchhoff and neo-Hookean are written out per lane (the neo-Hookean logarithms
 // and the plane-stress iteration stay scalar: the C library has no vector log or exp that

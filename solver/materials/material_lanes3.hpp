@@ -3,7 +3,7 @@
 // lane by lane with the same arithmetic, so the two give the same bits in a build without
 // floating-point contraction (-ffp-contract=off, as ci/compare_results builds); with contraction
 // the compiler may fuse a product into an addition differently in the two codes (a few ulps;
-// tests/test_internal_forces3.cpp).
+// tests/solver/forces/test_internal_forces3.cpp).
 //
 // St Venant-Kirchhoff's arithmetic is written once, in material3d.hpp (svk_first_piola3), and
 // both first_piola() and the lanes run it: Eigen evaluates a 3 x 3 product in an order and with

@@ -1,5 +1,5 @@
 // The entry functions of the fuzz targets (tests/fuzz/fuzz_*.cpp, libFuzzer) and of their
-// regression replay in the normal build (tests/test_fuzz_regressions.cpp), one per reader.
+// regression replay in the normal build (tests/harness/input/test_fuzz_regressions.cpp), one per reader.
 // Each takes the raw bytes of one input and returns true if the reader accepted it, false if it
 // rejected it with an InputError (the one expected way to say no). Anything else that escapes
 // (another exception type, a crash, a sanitizer report, a hang, running out of memory) is a
