@@ -17,41 +17,29 @@
 #include <utility>
 #include <vector>
 
+#include "tests/support/run_program.hpp"
+#include "tests/support/temp_dir.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Outcome = ricochet::test_support::ProgramOutcome;
 
 // `ricochet ARGS` through /bin/sh, after the shell commands `prefix` (e.g. "cd DIR &&").
 Outcome run(const std::string& args, const std::string& prefix = "") {
-  const std::string cmd = prefix + " " + std::string(RICOCHET_BINARY) + " " + args + " 2>&1";
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) o.output += buf.data();
-  const int raw = pclose(p);
-  o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return o;
+  return ricochet::test_support::run_ricochet(args, prefix);
 }
 
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = ricochet::test_support::fresh_test_dir("ricochet_cli_");
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
+    return ricochet::test_support::write_text(dir_ / name, text);
   }
   std::string out() const { return (dir_ / "out").string(); }
 

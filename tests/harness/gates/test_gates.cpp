@@ -17,6 +17,7 @@
 #include "harness/gates/gates.hpp"
 #include "harness/cli/cli.hpp"
 #include "harness/input/input_error.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace ricochet {
 namespace {
@@ -38,11 +39,7 @@ const char* const kSweep =
 class TempDir {
  public:
   TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("ricochet_gates_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
+    path_ = ricochet::test_support::fresh_test_dir("ricochet_gates_");
   }
   ~TempDir() {
     std::error_code ec;

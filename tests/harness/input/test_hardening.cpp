@@ -19,28 +19,22 @@
 #include "harness/input/input_error.hpp"
 #include "harness/input/run_plan.hpp"
 #include "harness/outputs/csv_reader.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Outcome = ricochet::test_support::ProgramOutcome;
 
 // `ricochet ARGS` under a 120 s timeout (exit 124 if it hangs). RICOCHET_UNDER_TEST, if set,
 // names another build of the program to check (e.g. an older one, to see these tests fail).
 Outcome ricochet(const std::string& args) {
   const char* other = std::getenv("RICOCHET_UNDER_TEST");
   const std::string binary = other && *other ? other : RICOCHET_BINARY;
-  const std::string cmd = "timeout 120 " + binary + " " + args + " 2>&1";
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) o.output += buf.data();
-  const int raw = pclose(p);
-  o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  Outcome o = ricochet::test_support::run_shell("timeout 120 " + binary + " " + args + " 2>&1");
+  if (!WIFEXITED(o.wait_status)) o.status = 128 + WTERMSIG(o.wait_status);
   return o;
 }
 
@@ -49,10 +43,7 @@ const std::string kCantilever = std::string(RICOCHET_SOURCE_DIR) + "/cases/examp
 class Hardening : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_hardening_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = ricochet::test_support::fresh_test_dir("ricochet_hardening_");
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string out() const { return (dir_ / "out").string(); }
@@ -68,9 +59,7 @@ class Hardening : public ::testing::Test {
     EXPECT_FALSE(fs::exists(out())) << "nothing may be written on bad input";
   }
   std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
+    return ricochet::test_support::write_text(dir_ / name, text);
   }
 
   fs::path dir_;

@@ -22,6 +22,7 @@
 #include "harness/outputs/csv_writer.hpp"
 #include "harness/outputs/json_io.hpp"
 #include "harness/outputs/vtu_writer.hpp"
+#include "tests/support/temp_dir.hpp"
 
 #include <zlib.h>
 
@@ -864,10 +865,7 @@ TEST(VtuWriter3d, SizeMismatchesAndBadIndicesThrow) {
 class AtomicFile : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_atomic_" + std::to_string(std::random_device{}()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
+    dir_ = ricochet::test_support::fresh_test_dir("ricochet_atomic_");
   }
   void TearDown() override {
     std::error_code ignored;

@@ -25,6 +25,9 @@
 #include "harness/input/input_error.hpp"
 #include "harness/stability/stability.hpp"
 #include "solver/forces/tangent.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/small_cases.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 
@@ -34,37 +37,12 @@ namespace {
 // A 0.1 m x 0.1 m plate of 10 x 10 square Q4 (2x2) cells, left edge fixed, moving up at
 // 0.1 m/s (strains ~ v / c_p ~ 1e-3: the response is linear). Plane stress, c_p = 103 m/s,
 // estimate min L_e / c_p = h / (sqrt(2) c_p) = 6.85e-5 s; the run lasts ~730 estimate steps.
-const std::string kSquare = R"(name = "stab_square"
-mesh = "m"
-[meshes.m]
-generator = "rectangle"
-width = 0.1
-height = 0.1
-nx = 10
-ny = 10
-[[bodies]]
-name = "b"
-velocity = [0.0, 0.1]
-[bodies.material]
-young = 1e7
-poisson = 0.25
-density = 1000.0
-[[boundary]]
-nodes = "left"
-type = "displacement"
-x = 0.0
-y = 0.0
-[time]
-end = 0.05
-)";
+const std::string kSquare = test_support::square_plate_case("stab_square", 10, false);
 
 class StabilityTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_stability_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test_support::fresh_test_dir("ricochet_stability_");
     file_ = (dir_ / "square.toml").string();
     std::ofstream(file_) << kSquare;
   }
@@ -109,10 +87,7 @@ const StabilityTrial& trial_at(const StabilityResult& r, double dt) {
   return *it;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test_support::text_of;
 
 // The Flanagan-Belytschko estimate h / (sqrt(2) c_p) of a square Q4 cell is conservative: the
 // true limit 2 / omega_max of the 2x2 Q4 with lumped mass on this mesh is 1.4137 x the
@@ -212,7 +187,7 @@ TEST_F(StabilityTest, RespectsMaxRuns) {
   }
   // Through the command: --max-runs 3 gives 3 trials in stability.json, and a bracket (exit 0).
   EXPECT_EQ(stability_command({file_, "--max-runs", "3", "--out", out(), "--quiet"}), 0);
-  const std::string json = slurp(fs::path(out()) / "stability.json");
+  const std::string json = text_of(fs::path(out()) / "stability.json");
   EXPECT_NE(json.find("\"runs\": 3,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"converged\": false"), std::string::npos) << json;
   EXPECT_TRUE(fs::exists(fs::path(out()) / "trials" / "03" / "summary.json"));
@@ -262,7 +237,7 @@ TEST_F(StabilityTest, ImplicitSchemeHasNoInstabilityUpToTheCap) {
   char end[32];
   std::snprintf(end, sizeof end, "%.17g", *opt.end_time);
   EXPECT_EQ(stability_command({file_, "--set", "scheme=implicit", "--end", end, "--out", out(), "--quiet"}), 5);
-  const std::string json = slurp(fs::path(out()) / "stability.json");
+  const std::string json = text_of(fs::path(out()) / "stability.json");
   EXPECT_NE(json.find("\"outcome\": \"no_unstable_up_to_cap\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"smallest_unstable_dt\": null"), std::string::npos) << json;
 }
@@ -283,7 +258,7 @@ TEST_F(StabilityTest, CapIsAThousandEstimatesWhenTheRunIsLonger) {
 
 TEST_F(StabilityTest, CommandWritesTheReport) {
   EXPECT_EQ(stability_command({file_, "--out", out(), "--quiet"}), 0);
-  const std::string json = slurp(fs::path(out()) / "stability.json");
+  const std::string json = text_of(fs::path(out()) / "stability.json");
   for (const char* key :
        {"\"case\": \"stab_square\"", "\"scheme\": \"explicit\"", "\"mesh\": \"m\"", "\"element\": \"q4\"",
         "\"critical_dt\":", "\"penalty_critical_dt\": null", "\"estimate\":", "\"criterion\":",
@@ -322,13 +297,9 @@ scale_factor = 1.0
 // The command line as the `ricochet` program runs it (harness/cli/cli.cpp wires the word).
 TEST_F(StabilityTest, ProgramRunsTheCommand) {
   auto run = [](const std::string& args, std::string& output) {
-    const std::string cmd = std::string(RICOCHET_BINARY) + " stability " + args + " 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    char buf[4096];
-    output.clear();
-    while (fgets(buf, sizeof buf, p)) output += buf;
-    const int raw = pclose(p);
-    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    const test_support::ProgramOutcome o = test_support::run_ricochet("stability " + args);
+    output = o.output;
+    return o.status;
   };
   std::string output;
   EXPECT_EQ(run(file_ + " --max-runs 2 --quiet --out " + out(), output), 0) << output;

@@ -18,6 +18,8 @@
 #include "harness/outputs/json_io.hpp"
 #include "harness/studies/study_spec.hpp"
 #include "harness/sweeps/run_identity.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -101,27 +103,14 @@ file = "sweep.toml"
 gates = "gates.toml"
 )";
 
-struct Outcome {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Outcome = test_support::ProgramOutcome;
 
-Outcome shell(const std::string& cmd) {
-  Outcome o;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) o.output += buf.data();
-  const int raw = pclose(p);
-  o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return o;
-}
+Outcome shell(const std::string& cmd) { return test_support::run_shell(cmd + " 2>&1"); }
 
 class StudyTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("ricochet_study_" + std::to_string(getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
+    dir_ = test_support::fresh_test_dir("ricochet_study_");
     fs::create_directories(dir_ / "studies" / "tiny");
     write("case.toml", kCase);
     write("plate.msh", kMesh);

@@ -10,7 +10,6 @@
 #include <fcntl.h>
 #include <omp.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -37,7 +36,11 @@
 #include "harness/sweeps/reference_errors.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/small_cases.hpp"
+#include "tests/support/sweep_checks.hpp"
 #include "tests/support/summary_table.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -47,54 +50,18 @@ namespace {
 // A 4 x 2-cell plate held at its left edge and set moving upwards: it vibrates, so its probe
 // and energy histories depend on the time step. `bad` names a mesh file that does not exist:
 // the case passes validation and the run fails when it builds the mesh.
-const std::string kCase = R"(name = "tiny"
-mesh = "m"
-[meshes.m]
-generator = "rectangle"
-width = 0.1
-height = 0.05
-nx = 4
-ny = 2
-[meshes.bad]
-file = "missing.msh"
-[[bodies]]
-name = "b"
-velocity = [0.0, 1.0]
-[bodies.material]
-young = 1e6
-poisson = 0.3
-density = 1000.0
-[[boundary]]
-nodes = "left"
-type = "displacement"
-x = 0.0
-y = 0.0
-[time]
-end = 2e-3
-dt = 1e-5
-[output]
-interval = 1e-4
-[[output.probes]]
-name = "P"
-point = [0.1, 0.05]
-)";
+const std::string kCase = test_support::tiny_plate_case();
 
 class SweepTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_sweep_" + std::to_string(getpid()) + "_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test_support::fresh_test_dir("ricochet_sweep_");
     write("case.toml", kCase);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
+    return test_support::write_text(dir_ / name, text);
   }
   fs::path out() const { return dir_ / "out"; }
 
@@ -114,17 +81,7 @@ class SweepTest : public ::testing::Test {
 
   // Expects read_sweep + expand + check_runs to reject the sweep, naming each of `parts`.
   void expect_rejected(const std::string& sweep_text, const std::vector<std::string>& parts) {
-    const std::string file = write("sweep.toml", sweep_text);
-    try {
-      const SweepSpec spec = read_sweep(file);
-      check_runs(spec, expand(spec));
-      ADD_FAILURE() << "accepted: " << sweep_text;
-    } catch (const InputError& e) {
-      const std::string msg = e.what();
-      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-      EXPECT_NE(msg.find(file), std::string::npos) << "names the sweep file: " << msg;
-      for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " in: " << msg;
-    }
+    test_support::expect_sweep_rejected(write("sweep.toml", sweep_text), sweep_text, parts);
   }
 
   fs::path dir_;
@@ -1135,23 +1092,7 @@ std::string slow_case(double end) {
   return "threads = 1\n" + s;
 }
 
-// Starts `args` (args[0] the program) with stdout and stderr to `log`.
-pid_t start_process(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<std::string> a = args;
-  std::vector<char*> argv;
-  for (auto& x : a) argv.push_back(x.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + args[0]);
-  return pid;
-}
+using test_support::start_process;
 
 // A live process of this machine: its parent, its state (R, S, Z, ...) and its arguments.
 struct Process {
@@ -1194,11 +1135,7 @@ std::vector<Process> processes_using(const fs::path& dir) {
   return found;
 }
 
-std::string text_of(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  return s.str();
-}
+using test_support::text_of;
 
 // Checks that a finished run folder holds one complete, consistent set of outputs: summary.json
 // ok, its history_rows the rows of history.csv (times strictly increasing: no row written twice),

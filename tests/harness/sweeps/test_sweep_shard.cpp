@@ -10,7 +10,6 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -37,46 +36,19 @@
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_shard.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/small_cases.hpp"
 #include "tests/support/summary_table.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
 
 namespace {
 
-// The tiny vibrating plate of test_sweep.cpp: `bad` names a mesh file that does not exist (the run
+// The tiny vibrating plate of the sweep tests: `bad` names a mesh file that does not exist (the run
 // passes validation and fails when it builds the mesh).
-const std::string kCase = R"(name = "tiny"
-mesh = "m"
-[meshes.m]
-generator = "rectangle"
-width = 0.1
-height = 0.05
-nx = 4
-ny = 2
-[meshes.bad]
-file = "missing.msh"
-[[bodies]]
-name = "b"
-velocity = [0.0, 1.0]
-[bodies.material]
-young = 1e6
-poisson = 0.3
-density = 1000.0
-[[boundary]]
-nodes = "left"
-type = "displacement"
-x = 0.0
-y = 0.0
-[time]
-end = 2e-3
-dt = 1e-5
-[output]
-interval = 1e-4
-[[output.probes]]
-name = "P"
-point = [0.1, 0.05]
-)";
+const std::string kCase = test_support::tiny_plate_case();
 
 // A shared reference with its check run, a group compared with it (with a failed run), a group
 // with its own reference runs, and a group compared with nothing: 13 runs.
@@ -117,11 +89,7 @@ min = 13
 const std::set<std::string> kTimingColumns = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
                                               "wall_seconds_min", "wall_seconds_max", "written_at"};
 
-std::string text_of(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  return s.str();
-}
+using test_support::text_of;
 
 using Table = test_support::SummaryTable;
 Table read_table(const fs::path& p) { return test_support::read_summary_table(p); }
@@ -143,46 +111,13 @@ void expect_same_table(const fs::path& a, const fs::path& b) {
   EXPECT_GT(compared, 500u);
 }
 
-struct Outcome {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using test_support::start_process;
+using test_support::wait_exit;
+
+using Outcome = test_support::ProgramOutcome;
 
 // `ricochet ARGS` through /bin/sh.
-Outcome program(const std::string& args) {
-  const std::string cmd = std::string(RICOCHET_BINARY) + " " + args + " 2>&1";
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) o.output += buf.data();
-  const int raw = pclose(p);
-  o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return o;
-}
-
-// Starts `args` (args[0] the program) with stdout and stderr to `log`.
-pid_t start_process(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<std::string> a = args;
-  std::vector<char*> argv;
-  for (auto& x : a) argv.push_back(x.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + args[0]);
-  return pid;
-}
-
-int wait_exit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+Outcome program(const std::string& args) { return test_support::run_ricochet(args); }
 
 long long mtime_ns(const fs::path& p) {
   struct stat st {};
@@ -212,20 +147,14 @@ std::vector<pid_t> processes_using(const fs::path& dir) {
 class SweepShardTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_shard_" + std::to_string(getpid()) + "_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test_support::fresh_test_dir("ricochet_shard_");
     write("case.toml", kCase);
     write("gates.toml", kGates);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
+    return test_support::write_text(dir_ / name, text);
   }
   fs::path out(const std::string& name = "out") const { return dir_ / name; }
 

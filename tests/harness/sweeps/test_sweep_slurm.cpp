@@ -26,42 +26,17 @@
 #include "harness/outputs/csv_reader.hpp"
 #include "harness/outputs/json_io.hpp"
 #include "harness/sweeps/sweep_slurm.hpp"
+#include "tests/support/run_program.hpp"
+#include "tests/support/small_cases.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
 
 namespace {
 
-// The tiny vibrating plate of test_sweep.cpp (runs of a few milliseconds).
-const std::string kCase = R"(name = "tiny"
-mesh = "m"
-[meshes.m]
-generator = "rectangle"
-width = 0.1
-height = 0.05
-nx = 4
-ny = 2
-[[bodies]]
-name = "b"
-velocity = [0.0, 1.0]
-[bodies.material]
-young = 1e6
-poisson = 0.3
-density = 1000.0
-[[boundary]]
-nodes = "left"
-type = "displacement"
-x = 0.0
-y = 0.0
-[time]
-end = 2e-3
-dt = 1e-5
-[output]
-interval = 1e-4
-[[output.probes]]
-name = "P"
-point = [0.1, 0.05]
-)";
+// The tiny vibrating plate of the sweep tests (runs of a few milliseconds).
+const std::string kCase = test_support::tiny_plate_case(false);
 
 // Three runs against their group's own reference run, and two compared with nothing: 6 runs.
 const std::string kSweep = R"(
@@ -87,11 +62,7 @@ min = 6
 const std::set<std::string> kTimingColumns = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
                                               "wall_seconds_min", "wall_seconds_max", "written_at"};
 
-std::string text_of(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  return s.str();
-}
+using test_support::text_of;
 
 void write_file(const fs::path& p, const std::string& text, bool executable = false) {
   fs::create_directories(p.parent_path());
@@ -127,24 +98,15 @@ struct Outcome {
 // `ricochet ARGS` through /bin/sh, after `prefix` (e.g. "cd DIR && PATH=... "), stdout and stderr apart.
 Outcome program(const std::string& args, const std::string& prefix, const fs::path& err_file) {
   const std::string cmd = prefix + " " + shell_quote(RICOCHET_BINARY) + " " + args + " 2>" + shell_quote(err_file.string());
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) o.out += buf.data();
-  const int raw = pclose(p);
-  o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  o.err = text_of(err_file);
-  return o;
+  const test_support::ProgramOutcome r = test_support::run_shell(cmd);
+  return {r.status, r.output, text_of(err_file)};
 }
 
 class SweepSlurmTest : public ::testing::Test {
  protected:
   void SetUp() override {
     // Spaces and a single quote in every path the scripts name.
-    dir_ = fs::temp_directory_path() / ("ricochet_slurm_" + std::to_string(getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name()) /
-           "it's a dir";
-    fs::remove_all(dir_.parent_path());
+    dir_ = test_support::fresh_test_dir("ricochet_slurm_") / "it's a dir";
     fs::create_directories(dir_);
     write_file(dir_ / "case.toml", kCase);
     write_file(dir_ / "sweep.toml", kSweep);

@@ -22,7 +22,10 @@
 #include "harness/outputs/json_io.hpp"
 #include "harness/sweeps/sweep.hpp"
 #include "harness/sweeps/sweep_spec.hpp"
+#include "tests/support/small_cases.hpp"
+#include "tests/support/sweep_checks.hpp"
 #include "tests/support/summary_table.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace ricochet;
@@ -33,34 +36,7 @@ namespace {
 // tests/harness/stability/test_stability.cpp on a coarser mesh. Its estimate min L_e / c_p is 1.7e-4 s at
 // young = 1e7 (c_p = 103 m/s), half of it at young = 4e7; a trial of 0.02 s is ~120 steps at the
 // estimate, so a whole search takes a fraction of a second.
-const std::string kCase = R"(name = "stab_plate"
-mesh = "m"
-[meshes.m]
-generator = "rectangle"
-width = 0.1
-height = 0.1
-nx = 4
-ny = 4
-[[bodies]]
-name = "b"
-velocity = [0.0, 0.1]
-[bodies.material]
-young = 1e7
-poisson = 0.25
-density = 1000.0
-[[boundary]]
-nodes = "left"
-type = "displacement"
-x = 0.0
-y = 0.0
-[time]
-end = 0.05
-[output]
-interval = 1e-3
-[[output.probes]]
-name = "P"
-point = [0.1, 0.1]
-)";
+const std::string kCase = test_support::square_plate_case("stab_plate", 4, true);
 
 const std::string kSweep = R"(name = "stab"
 base = "case.toml"
@@ -77,19 +53,13 @@ cross = { "bodies[0].material.young" = [1e7, 4e7] }
 class SweepStabilityTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ricochet_sweep_stability_" + std::to_string(getpid()) + "_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test_support::fresh_test_dir("ricochet_sweep_stability_");
     write("case.toml", kCase);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
+    return test_support::write_text(dir_ / name, text);
   }
   fs::path out() const { return dir_ / "out"; }
 
@@ -106,17 +76,7 @@ class SweepStabilityTest : public ::testing::Test {
   // Expects read_sweep + expand + check_runs to reject the sweep with one line naming the sweep
   // file and each of `parts`.
   void expect_rejected(const std::string& sweep_text, const std::vector<std::string>& parts) {
-    const std::string file = write("sweep.toml", sweep_text);
-    try {
-      const SweepSpec spec = read_sweep(file);
-      check_runs(spec, expand(spec));
-      ADD_FAILURE() << "accepted: " << sweep_text;
-    } catch (const InputError& e) {
-      const std::string msg = e.what();
-      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-      EXPECT_NE(msg.find(file), std::string::npos) << "names the sweep file: " << msg;
-      for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " in: " << msg;
-    }
+    test_support::expect_sweep_rejected(write("sweep.toml", sweep_text), sweep_text, parts);
   }
 
   fs::path dir_;
@@ -126,10 +86,7 @@ class SweepStabilityTest : public ::testing::Test {
 using Table = test_support::SummaryTable;
 Table read_table(const fs::path& p) { return test_support::read_summary_table(p); }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test_support::text_of;
 
 const char* kIds[] = {"dt/000-bodies.0.material.young=1e7", "dt/001-bodies.0.material.young=4e7"};
 
@@ -145,7 +102,7 @@ TEST_F(SweepStabilityTest, RunsSearchesAndTablesThem) {
             std::string::npos) << log_.str();
 
   const Table t = read_table(out() / "summary.csv");
-  ASSERT_EQ(t.rows.size(), 2u) << slurp(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 2u) << text_of(out() / "summary.csv");
   for (const char* col : {"stable_dt", "unstable_dt", "estimate_dt", "stable_over_estimate", "outcome", "converged",
                           "trials", "unstable_reason", "bodies[0].material.young", "scheme", "elements"})
     EXPECT_NE(std::find(t.header.begin(), t.header.end(), col), t.header.end()) << col;
@@ -195,7 +152,7 @@ TEST_F(SweepStabilityTest, RunsSearchesAndTablesThem) {
     EXPECT_FALSE(reason.empty());
     EXPECT_EQ(r.at("unstable_reason"), reason);
     EXPECT_TRUE(fs::exists(folder / "run.lock"));
-    EXPECT_NE(slurp(folder / "overrides.json").find("\"kind\": \"stability\""), std::string::npos);
+    EXPECT_NE(text_of(folder / "overrides.json").find("\"kind\": \"stability\""), std::string::npos);
     estimates.push_back(est);
   }
   // Four times the stiffness, twice the wave speed: half the estimate.
@@ -206,12 +163,12 @@ TEST_F(SweepStabilityTest, RunsSearchesAndTablesThem) {
 
   // Resume: both searches are done (their stability.json is valid); nothing runs again.
   const auto written = fs::last_write_time(out() / "runs" / kIds[0] / "stability.json");
-  const std::string table = slurp(out() / "summary.csv");
+  const std::string table = text_of(out() / "summary.csv");
   const SweepOutcome again = run(kSweep, 2);
   EXPECT_EQ(again.resumed, 2u);
   EXPECT_EQ(again.executed, 0u);
   EXPECT_EQ(fs::last_write_time(out() / "runs" / kIds[0] / "stability.json"), written);
-  EXPECT_EQ(slurp(out() / "summary.csv"), table);
+  EXPECT_EQ(text_of(out() / "summary.csv"), table);
 
   // A changed search option is another search: both run again.
   std::string tighter = kSweep;
@@ -342,7 +299,7 @@ cross = { mesh = ["bad"] }
 )", 1);
   EXPECT_EQ(o.failed, 1u);
   const Table t = read_table(out() / "summary.csv");
-  ASSERT_EQ(t.rows.size(), 1u) << slurp(out() / "summary.csv");
+  ASSERT_EQ(t.rows.size(), 1u) << text_of(out() / "summary.csv");
   const auto& r = t.row("dt/000-mesh=bad");
   EXPECT_EQ(r.at("kind"), "stability");
   EXPECT_EQ(r.at("status"), "failed");

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "solver/forces/internal_forces.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "tests/support/verification_meshes.hpp"
 
 namespace ricochet {
@@ -99,13 +100,8 @@ TEST(Elements, ForcesAreEnergyGradient) {
       for (int d = 0; d < u.size(); ++d) u[d] = amp(gen);
       Eigen::VectorXd f(model.num_dofs()), scratch(model.num_dofs());
       stored_energy(model, u, f);
-      Eigen::VectorXd fd(model.num_dofs());
-      for (int d = 0; d < u.size(); ++d) {
-        Eigen::VectorXd up = u, um = u;
-        up[d] += h;
-        um[d] -= h;
-        fd[d] = (stored_energy(model, up, scratch) - stored_energy(model, um, scratch)) / (2 * h);
-      }
+      const Eigen::VectorXd fd =
+          test_support::fd_gradient([&](const Eigen::VectorXd& w) { return stored_energy(model, w, scratch); }, u, h);
       const double err = (fd - f).lpNorm<Eigen::Infinity>() / f.lpNorm<Eigen::Infinity>();
       EXPECT_LT(err, 1e-6) << element_name(kind) << ", " << mc.name;
       std::printf("[elements] dE/du vs f_int  %-20s %-26s rel. error %.2e\n", element_name(kind),
@@ -309,14 +305,9 @@ TEST(Elements, LumpedMassesSumToBodyMass) {
 double omega_max(const Model<2>& model) {
   const int n = model.num_dofs();
   const double h = 1e-9;  // [m]; elements are ~1 m, so the nonlinear part is ~1e-9 relative
-  Eigen::MatrixXd k(n, n);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-  for (int j = 0; j < n; ++j) {
-    Eigen::VectorXd up = zero, um = zero;
-    up[j] = h;
-    um[j] = -h;
-    k.col(j) = (forces(model, up, zero) - forces(model, um, zero)) / (2.0 * h);
-  }
+  const Eigen::MatrixXd k =
+      test_support::fd_jacobian([&](const Eigen::VectorXd& w) { return forces(model, w, zero); }, zero, h);
   const Eigen::VectorXd s = model.inv_mass.cwiseSqrt();
   const Eigen::MatrixXd a = s.asDiagonal() * (0.5 * (k + k.transpose())) * s.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(a, Eigen::EigenvaluesOnly);

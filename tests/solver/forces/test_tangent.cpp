@@ -27,6 +27,8 @@
 
 #include "solver/forces/internal_forces.hpp"
 #include "solver/forces/tangent.hpp"
+#include "tests/support/deformations.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "tests/support/matrix_checks.hpp"
 #include "tests/support/verification_meshes.hpp"
 
@@ -62,46 +64,14 @@ std::vector<MaterialCase> material_cases(double poisson = kPoisson) {
   return c;
 }
 
-Mat2 rotation(double angle) {
-  Mat2 r;
-  r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-  return r;
-}
-
-// Random well-conditioned F = R(theta) Q diag(l1, l2) Q^T, stretches in [0.75, 1.35],
-// |theta| <= 0.6 rad, det F in [0.5, 2] (as in test_materials).
-std::vector<Mat2> random_deformations(int count, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> stretch(0.75, 1.35);
-  std::uniform_real_distribution<double> angle(-0.6, 0.6);
-  std::uniform_real_distribution<double> axis(0.0, 3.14159);
-  std::vector<Mat2> out;
-  while (static_cast<int>(out.size()) < count) {
-    const Mat2 q = rotation(axis(gen));
-    const Mat2 u = q * Eigen::Vector2d(stretch(gen), stretch(gen)).asDiagonal() * q.transpose();
-    const Mat2 f = rotation(angle(gen)) * u;
-    const double j = f.determinant();
-    if (j >= 0.5 && j <= 2.0) out.push_back(f);
-  }
-  return out;
-}
+using test_support::random_deformations;  // as in test_materials
+using test_support::rotation;
 
 using test_support::max_abs;
 
 Eigen::Matrix4d fd_tangent(const Material& m, const Mat2& F, double h) {
-  Eigen::Matrix4d a;
-  for (int k = 0; k < 2; ++k)
-    for (int l = 0; l < 2; ++l) {
-      Mat2 fp = F, fm = F;
-      fp(k, l) += h;
-      fm(k, l) -= h;
-      const Mat2 dp = std::visit(
-          [&](const auto& x) { return Mat2((x.first_piola(fp) - x.first_piola(fm)) / (2 * h)); },
-          m);
-      for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j) a(2 * i + j, 2 * k + l) = dp(i, j);
-    }
-  return a;
+  return test_support::fd_tangent<2>(
+      [&](const Mat2& g) { return std::visit([&](const auto& x) { return Mat2(x.first_piola(g)); }, m); }, F, h);
 }
 
 TEST(MaterialTangent, MatchesFiniteDifferenceOfFirstPiola) {
@@ -188,20 +158,8 @@ Eigen::VectorXd forces(const Model<2>& model, const Eigen::VectorXd& u, const Ei
 // Central-difference Jacobian of internal_forces with respect to u (wrt_v = false) or v.
 Eigen::MatrixXd fd_jacobian(const Model<2>& model, const Eigen::VectorXd& u,
                             const Eigen::VectorXd& v, bool wrt_v, double h) {
-  const int n = model.num_dofs();
-  Eigen::MatrixXd j(n, n);
-  for (int d = 0; d < n; ++d) {
-    Eigen::VectorXd up = u, um = u, vp = v, vm = v;
-    if (wrt_v) {
-      vp[d] += h;
-      vm[d] -= h;
-    } else {
-      up[d] += h;
-      um[d] -= h;
-    }
-    j.col(d) = (forces(model, up, vp) - forces(model, um, vm)) / (2 * h);
-  }
-  return j;
+  if (wrt_v) return test_support::fd_jacobian([&](const Eigen::VectorXd& w) { return forces(model, u, w); }, v, h);
+  return test_support::fd_jacobian([&](const Eigen::VectorXd& w) { return forces(model, w, v); }, u, h);
 }
 
 Eigen::MatrixXd assembled(const Model<2>& model, SystemMatrix& s, const Eigen::VectorXd& u,

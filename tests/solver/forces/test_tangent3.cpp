@@ -6,8 +6,9 @@
 
 #include <cstdio>
 
-#include "tests/support/meshes3.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "solver/forces/tangent.hpp"
+#include "tests/support/meshes3.hpp"
 
 namespace ricochet {
 namespace {
@@ -23,15 +24,8 @@ Eigen::VectorXd forces(const Model<3>& model, const Eigen::VectorXd& u, const Ei
 // Central-difference Jacobian of the 3D force pass with respect to u (wrt_v = false) or v.
 Eigen::MatrixXd fd_jacobian(const Model<3>& model, const Eigen::VectorXd& u, const Eigen::VectorXd& v, bool wrt_v,
                             double h) {
-  const int n = model.num_dofs();
-  Eigen::MatrixXd j(n, n);
-  for (int d = 0; d < n; ++d) {
-    Eigen::VectorXd up = u, um = u, vp = v, vm = v;
-    (wrt_v ? vp : up)[d] += h;
-    (wrt_v ? vm : um)[d] -= h;
-    j.col(d) = (forces(model, up, vp) - forces(model, um, vm)) / (2 * h);
-  }
-  return j;
+  if (wrt_v) return test_support::fd_jacobian([&](const Eigen::VectorXd& w) { return forces(model, u, w); }, v, h);
+  return test_support::fd_jacobian([&](const Eigen::VectorXd& w) { return forces(model, w, v); }, u, h);
 }
 
 Eigen::MatrixXd assembled(const Model<3>& model, SystemMatrix& s, const Eigen::VectorXd& u, const Eigen::VectorXd& v,

@@ -22,6 +22,8 @@
 #include "harness/input/case_setup.hpp"
 #include "harness/input/input_error.hpp"
 #include "solver/materials/material.hpp"
+#include "tests/support/deformations.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "tests/support/matrix_checks.hpp"
 
 namespace ricochet {
@@ -33,11 +35,7 @@ constexpr double kC01 = 0.5e5;      // [Pa]
 constexpr double kKappa = 2e6;      // [Pa]
 constexpr double kDensity = 1000.0; // [kg/m^3]
 
-Mat2 rotation(double angle) {
-  Mat2 r;
-  r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-  return r;
-}
+using test_support::rotation;
 
 // F = R(theta) Q diag(l1, l2) Q^T with stretches in [lo, hi] and |theta| <= 0.6 rad.
 std::vector<Mat2> random_deformations(int count, unsigned seed, double lo = 0.75,
@@ -109,14 +107,7 @@ TEST(Hyperelastic, FirstPiolaIsEnergyDerivative) {
     for (const Mat2& f : random_deformations(20, 8, 0.55, 1.8)) fs.push_back(f);
     for (const Mat2& f : fs) {
       const Mat2 p = piola(c.material, f);
-      Mat2 fd;
-      for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j) {
-          Mat2 fp = f, fm = f;
-          fp(i, j) += h;
-          fm(i, j) -= h;
-          fd(i, j) = (energy(c.material, fp) - energy(c.material, fm)) / (2.0 * h);
-        }
+      const Mat2 fd = test_support::fd_gradient([&](const Mat2& g) { return energy(c.material, g); }, f, h);
       worst = std::max(worst, (fd - p).norm() / p.norm());
     }
     EXPECT_LT(worst, 1e-6) << c.name;
@@ -125,17 +116,7 @@ TEST(Hyperelastic, FirstPiolaIsEnergyDerivative) {
 }
 
 Eigen::Matrix4d fd_tangent(const Material& m, const Mat2& F, double h) {
-  Eigen::Matrix4d a;
-  for (int k = 0; k < 2; ++k)
-    for (int l = 0; l < 2; ++l) {
-      Mat2 fp = F, fm = F;
-      fp(k, l) += h;
-      fm(k, l) -= h;
-      const Mat2 dp = (piola(m, fp) - piola(m, fm)) / (2.0 * h);
-      for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j) a(2 * i + j, 2 * k + l) = dp(i, j);
-    }
-  return a;
+  return test_support::fd_tangent<2>([&](const Mat2& g) { return piola(m, g); }, F, h);
 }
 
 TEST(Hyperelastic, TangentIsFirstPiolaDerivative) {

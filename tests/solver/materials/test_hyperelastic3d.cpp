@@ -18,6 +18,7 @@
 
 #include "solver/materials/material.hpp"
 #include "solver/materials/material3d.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "tests/support/matrix_checks.hpp"
 
 #include "tests/support/alloc_counter.hpp"
@@ -146,29 +147,11 @@ std::vector<Mat3> test_points(unsigned seed) {
 
 // Central differences of W in each entry of F, and of P in each entry of F.
 Mat3 fd_piola(const Material3& m, const Mat3& F, double h) {
-  Mat3 fd;
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l) {
-      Mat3 fp = F, fm = F;
-      fp(k, l) += h;
-      fm(k, l) -= h;
-      fd(k, l) = (energy(m, fp) - energy(m, fm)) / (2.0 * h);
-    }
-  return fd;
+  return test_support::fd_gradient([&](const Mat3& g) { return energy(m, g); }, F, h);
 }
 template <class PiolaOf>
 Mat9 fd_tangent(const PiolaOf& piola_of, const Mat3& F, double h) {
-  Mat9 a;
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l) {
-      Mat3 fp = F, fm = F;
-      fp(k, l) += h;
-      fm(k, l) -= h;
-      const Mat3 dp = (piola_of(fp) - piola_of(fm)) / (2.0 * h);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) a(3 * i + j, 3 * k + l) = dp(i, j);
-    }
-  return a;
+  return test_support::fd_tangent<3>([&](const Mat3& g) { return Mat3(piola_of(g)); }, F, h);
 }
 
 // Tolerances of the finite-difference tests (central differences, relative errors).

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "solver/materials/material.hpp"
+#include "tests/support/deformations.hpp"
+#include "tests/support/finite_difference.hpp"
 
 namespace ricochet {
 namespace {
@@ -18,29 +20,8 @@ constexpr double kYoung = 200e9;  // [Pa]
 constexpr double kPoisson = 0.3;  // [-]
 constexpr double kDensity = 7800.0;  // [kg/m^3]
 
-Mat2 rotation(double angle) {
-  Mat2 r;
-  r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-  return r;
-}
-
-// Random well-conditioned deformation gradients: F = R(theta) Q diag(l1, l2) Q^T with
-// stretches in [0.75, 1.35] (so det F lies in 0.56..1.82, inside 0.5..2) and |theta| <= 0.6 rad.
-std::vector<Mat2> random_deformations(int count, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> stretch(0.75, 1.35);
-  std::uniform_real_distribution<double> angle(-0.6, 0.6);
-  std::uniform_real_distribution<double> axis(0.0, 3.14159);
-  std::vector<Mat2> out;
-  while (static_cast<int>(out.size()) < count) {
-    const Mat2 q = rotation(axis(gen));
-    const Mat2 u = q * Eigen::Vector2d(stretch(gen), stretch(gen)).asDiagonal() * q.transpose();
-    const Mat2 f = rotation(angle(gen)) * u;
-    const double j = f.determinant();
-    if (j >= 0.5 && j <= 2.0) out.push_back(f);
-  }
-  return out;
-}
+using test_support::random_deformations;
+using test_support::rotation;
 
 struct Case {
   std::string name;
@@ -78,14 +59,7 @@ TEST(Materials, FirstPiolaIsEnergyDerivative) {
     double worst = 0.0;
     for (const Mat2& f : random_deformations(50, 7)) {
       const Mat2 p = piola(c.material, f);
-      Mat2 fd;
-      for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j) {
-          Mat2 fp = f, fm = f;
-          fp(i, j) += h;
-          fm(i, j) -= h;
-          fd(i, j) = (energy(c.material, fp) - energy(c.material, fm)) / (2.0 * h);
-        }
+      const Mat2 fd = test_support::fd_gradient([&](const Mat2& g) { return energy(c.material, g); }, f, h);
       worst = std::max(worst, (fd - p).norm() / p.norm());
     }
     EXPECT_LT(worst, 1e-6) << c.name;

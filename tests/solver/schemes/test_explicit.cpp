@@ -15,6 +15,7 @@
 #include "solver/observers/observers.hpp"
 #include "solver/schemes/central_difference.hpp"
 #include "solver/schemes/explicit.hpp"
+#include "tests/support/finite_difference.hpp"
 #include "tests/support/verification_meshes.hpp"
 
 namespace ricochet {
@@ -331,16 +332,13 @@ double true_critical_dt(const Model<2>& model) {
   const int n = model.num_dofs();
   const double h = 1e-9;  // [m]; cells are ~0.25 m, so the nonlinear part is ~1e-8 relative
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd k(n, n);
-  Eigen::VectorXd fp(n), fm(n);
-  for (int j = 0; j < n; ++j) {
-    Eigen::VectorXd up = zero, um = zero;
-    up[j] = h;
-    um[j] = -h;
-    internal_forces(model, up.data(), zero.data(), fp.data(), false);
-    internal_forces(model, um.data(), zero.data(), fm.data(), false);
-    k.col(j) = (fp - fm) / (2.0 * h);
-  }
+  const Eigen::MatrixXd k = test_support::fd_jacobian(
+      [&](const Eigen::VectorXd& w) {
+        Eigen::VectorXd f(n);
+        internal_forces(model, w.data(), zero.data(), f.data(), false);
+        return f;
+      },
+      zero, h);
   const Eigen::VectorXd s = model.inv_mass.cwiseSqrt();
   const Eigen::MatrixXd a = s.asDiagonal() * (0.5 * (k + k.transpose())) * s.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(a, Eigen::EigenvaluesOnly);
