@@ -34,7 +34,7 @@ const Matrix& iteration_matrix(const std::string& mesh, const std::string& dt) {
   const CaseSpec spec = read_case(std::string(RICOCHET_SOURCE_DIR) + "/cases/oblique_plate.toml",
                                   {"mesh=" + mesh, "time.dt=" + dt});
   const PreparedCase pc = prepare_case(spec);
-  const Model<2>& model = pc.model;
+  const Model<2>& model = pc.model<2>();
   const double h = pc.settings.dt;
   cached = std::make_unique<Matrix>();
   cached->system = make_system_matrix(model);

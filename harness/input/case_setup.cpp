@@ -349,7 +349,7 @@ InputError slave_inside_master(const CaseSpec& c, const M& model, const Body& sl
 }
 
 void check_initial_penetration(const CaseSpec& c, const Model<2>& model, const RunSettings& s) {
-  check_obstacle_penetration(c, model, s.obstacles);
+  check_obstacle_penetration(c, model, obstacles_of(s, model));
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
     const BodyInfo<2>& slave = model.bodies[s.body_pairs[k].slave];
     const BodyInfo<2>& master = model.bodies[s.body_pairs[k].master];
@@ -369,7 +369,7 @@ void check_initial_penetration(const CaseSpec& c, const Model<2>& model, const R
 // signed distance to its boundary faces, body_contact3.hpp; nodes outside the master's
 // bounding box are skipped).
 void check_initial_penetration(const CaseSpec& c, const Model<3>& model, const RunSettings& s) {
-  check_obstacle_penetration(c, model, s.obstacles3);
+  check_obstacle_penetration(c, model, obstacles_of(s, model));
   const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
   auto ref = [&](int j) -> Vec3 { return model.ref.col(j); };
   for (std::size_t k = 0; k < s.body_pairs.size(); ++k) {
@@ -413,9 +413,8 @@ void add_box_node_sets(const CaseSpec& c, const BodySpec& b, MeshT& mesh) {
   }
 }
 
-// The model of the case's bodies, with p's meshes: 2D (Model<2>, p.meshes) or 3D (Model<3>, p.meshes3).
-void build_bodies(PreparedCase& p, Model<2>& model) {
-  const CaseSpec& c = p.spec;
+// The case's meshes and the model of its bodies, in 2D or 3D.
+void build_bodies(const CaseSpec& c, CaseBodies<2>& p) {
   std::vector<BodyInput<2>> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh mesh = build_mesh(c, c.meshes.at(b.mesh));
@@ -432,14 +431,13 @@ void build_bodies(PreparedCase& p, Model<2>& model) {
     inputs.push_back(std::move(in));
   }
   try {
-    model = build_model(inputs, c.plane, c.gravity.head<2>());
+    p.model = build_model(inputs, c.plane, c.gravity.head<2>());
   } catch (const std::invalid_argument& e) {
     throw InputError(c.file + ": bodies: " + e.what());
   }
 }
 
-void build_bodies(PreparedCase& p, Model<3>& model) {
-  const CaseSpec& c = p.spec;
+void build_bodies(const CaseSpec& c, CaseBodies<3>& p) {
   std::vector<BodyInput<3>> inputs;
   for (const BodySpec& b : c.bodies) {
     Mesh3 mesh = build_mesh3(c, c.meshes.at(b.mesh));
@@ -452,20 +450,18 @@ void build_bodies(PreparedCase& p, Model<3>& model) {
     in.hourglass = b.hourglass;
     in.initial_velocity = c.turned(b.velocity);
     in.mesh = mesh;
-    p.meshes3.push_back(std::move(mesh));
+    p.meshes.push_back(std::move(mesh));
     inputs.push_back(std::move(in));
   }
   try {
-    model = build_model(inputs, c.turned(c.gravity));
+    p.model = build_model(inputs, c.turned(c.gravity));
   } catch (const std::invalid_argument& e) {
     throw InputError(c.file + ": bodies: " + e.what());
   }
 }
 
-const std::vector<Mesh>& meshes_of(const PreparedCase& p, const Model<2>&) { return p.meshes; }
-const std::vector<Mesh3>& meshes_of(const PreparedCase& p, const Model<3>&) { return p.meshes3; }
-std::vector<Obstacle>& obstacles_in(RunSettings& s, const Model<2>&) { return s.obstacles; }
-std::vector<Obstacle3>& obstacles_in(RunSettings& s, const Model<3>&) { return s.obstacles3; }
+const std::vector<Mesh>& meshes_of(const PreparedCase& p, const Model<2>&) { return p.meshes<2>(); }
+const std::vector<Mesh3>& meshes_of(const PreparedCase& p, const Model<3>&) { return p.meshes<3>(); }
 const Obstacle& shape_of(const ObstacleSpec& o, const Model<2>&) { return o.shape; }
 const Obstacle3& shape_of(const ObstacleSpec& o, const Model<3>&) { return o.shape3; }
 // An obstacle turned by the case's scene rotation (3D).
@@ -635,13 +631,11 @@ PreparedCase prepare_case(const CaseSpec& spec) {
   PreparedCase p;
   p.spec = spec;
   check_mesh_plan(p.spec);  // before a mesh is built: the generated meshes' memory
-  if (p.spec.dimension == 3) {
-    build_bodies(p, p.model3);
-    prepare_run(p, p.model3);
-  } else {
-    build_bodies(p, p.model);
-    prepare_run(p, p.model);
-  }
+  if (p.spec.dimension == 3)
+    build_bodies(p.spec, p.bodies.emplace<CaseBodies<3>>());
+  else
+    build_bodies(p.spec, p.bodies.emplace<CaseBodies<2>>());
+  std::visit([&](auto& bodies) { prepare_run(p, bodies.model); }, p.bodies);
   check_run_plan(p);  // steps, history rows, memory, the automatic step against time.end
   return p;
 }

@@ -2,6 +2,8 @@
 // the model assembled, prescribed DOFs and probes placed, the time step fixed.
 #pragma once
 
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "harness/input/case_spec.hpp"
@@ -17,16 +19,23 @@ struct ProbeInfo {
   double distance = 0.0;  // from the requested point [m]
 };
 
-// A 2D case (spec.dimension 2) has its meshes and model in `meshes` and `model`, a 3D one in
-// `meshes3` and `model3`; the others stay empty. Code for both reaches the case's model through
-// with_model().
+// The bodies of a case as built, in dimension D: per body its mesh (after scale, offset and the
+// scene rotation, with all node sets; Mesh in 2D, Mesh3 in 3D), and the model assembled from them.
+template <int D>
+struct CaseBodies {
+  std::vector<std::conditional_t<D == 2, Mesh, Mesh3>> meshes;
+  Model<D> model;
+};
+
 struct PreparedCase {
   CaseSpec spec;
-  std::vector<Mesh> meshes;  // per body, after scale and offset, with all node sets (2D)
-  Model<2> model;
-  std::vector<Mesh3> meshes3;  // the same in 3D
-  Model<3> model3;
+  std::variant<CaseBodies<2>, CaseBodies<3>> bodies;  // of spec.dimension
   int dimension() const { return spec.dimension; }
+  // The model and meshes of a case of dimension D (std::bad_variant_access for the other one).
+  template <int D>
+  const Model<D>& model() const { return std::get<CaseBodies<D>>(bodies).model; }
+  template <int D>
+  const auto& meshes() const { return std::get<CaseBodies<D>>(bodies).meshes; }
   RunSettings settings;     // settings.dt: the step of the run, decided by prepare_case
   // The step was chosen automatically (time.dt absent): safety x critical_time_step().
   bool dt_auto() const { return !spec.dt.has_value(); }
@@ -38,8 +47,8 @@ struct PreparedCase {
 // bodies, num_nodes(), num_cells(), critical_dt, critical_cell, ref, mass, kDim).
 template <class Fn>
 decltype(auto) with_model(const PreparedCase& pc, Fn&& fn) {
-  if (pc.dimension() == 3) return fn(pc.model3);
-  return fn(pc.model);
+  if (pc.dimension() == 3) return fn(pc.model<3>());
+  return fn(pc.model<2>());
 }
 
 // Throws InputError naming the case file and key for anything that cannot be set up

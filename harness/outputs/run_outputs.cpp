@@ -33,7 +33,8 @@ void set_arrays(Data& d, const FieldSnapshot& f, const Map& u, const Map& v, con
 }
 
 std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) {
-  const Model<2>& m = pc.model;
+  const Model<2>& m = pc.model<2>();
+  const std::vector<Mesh>& meshes = pc.meshes<2>();
   VtuData d;
   d.time = f.time;
   const Eigen::Map<const Eigen::Matrix2Xd> u(f.u.data(), 2, m.num_nodes());
@@ -41,16 +42,16 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
   d.points = m.ref + u;
   std::vector<int> body(m.num_cells());
   // Cells in global order: per body its quads, then its triangles (as the model numbers them).
-  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+  for (std::size_t b = 0; b < meshes.size(); ++b) {
     const int n0 = m.bodies[b].first_node;
-    for (auto q : pc.meshes[b].quads) {
+    for (auto q : meshes[b].quads) {
       for (int& i : q) i += n0;
       d.quads.push_back(q);
     }
   }
-  for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+  for (std::size_t b = 0; b < meshes.size(); ++b) {
     const int n0 = m.bodies[b].first_node;
-    for (auto t : pc.meshes[b].tris) {
+    for (auto t : meshes[b].tris) {
       for (int& i : t) i += n0;
       d.tris.push_back(t);
     }
@@ -62,9 +63,9 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
   cauchy.reserve(6 * static_cast<std::size_t>(m.num_cells()));
   green_lagrange.reserve(cauchy.capacity());
   for (int pass = 0; pass < 2; ++pass)
-    for (std::size_t b = 0; b < pc.meshes.size(); ++b) {
+    for (std::size_t b = 0; b < meshes.size(); ++b) {
       const int c0 = m.bodies[b].first_cell;
-      const int nq = static_cast<int>(pc.meshes[b].quads.size());
+      const int nq = static_cast<int>(meshes[b].quads.size());
       const int begin = pass == 0 ? c0 : c0 + nq;
       const int end = pass == 0 ? c0 + nq : c0 + m.bodies[b].num_cells;
       for (int c = begin; c < end; ++c) {
@@ -87,7 +88,8 @@ std::string format_vtu_snapshot(const PreparedCase& pc, const FieldSnapshot& f) 
 // then its tetrahedra, as the model numbers them and VtuData3 writes them: VTU's order is the
 // cells', hexes then tets per body, so the per-cell values need no reordering).
 std::string format_vtu_snapshot3(const PreparedCase& pc, const FieldSnapshot& f) {
-  const Model<3>& m = pc.model3;
+  const Model<3>& m = pc.model<3>();
+  const std::vector<Mesh3>& meshes = pc.meshes<3>();
   const int n = m.num_nodes();
   if (f.contact_force.size() != 3 * static_cast<std::size_t>(n) ||
       f.cauchy.size() != 6 * static_cast<std::size_t>(m.num_cells()) || f.green_lagrange.size() != f.cauchy.size())
@@ -100,9 +102,9 @@ std::string format_vtu_snapshot3(const PreparedCase& pc, const FieldSnapshot& f)
   // are put in that order.
   std::vector<int> order;  // global cell of each VTU cell
   for (int pass = 0; pass < 2; ++pass)
-    for (std::size_t b = 0; b < pc.meshes3.size(); ++b) {
+    for (std::size_t b = 0; b < meshes.size(); ++b) {
       const int n0 = m.bodies[b].first_node, c0 = m.bodies[b].first_cell;
-      const Mesh3& mesh = pc.meshes3[b];
+      const Mesh3& mesh = meshes[b];
       const int nh = static_cast<int>(mesh.hexes.size());
       if (pass == 0) {
         for (int k = 0; k < nh; ++k) {

@@ -4,7 +4,7 @@
 // dissipation, stored energy, iterations), recorded in one place. A scheme supplies only its
 // solve, the reactions of the step:
 //   - the semi-explicit bi-potential update at position level (bipotential_contact.hpp),
-//   - the implicit scheme's condensed problem (implicit.cpp),
+//   - the implicit scheme's condensed problem (condensed_contact.hpp),
 //   - the explicit penalty springs (penalty_contact.hpp).
 //
 // A step of any scheme runs the same frame:

@@ -92,7 +92,7 @@ inline double slip_work(const LocalPair3d& r, double scale, const Vec2& slip) { 
 // Feng & Magnain 2010, Section 2) r <- bipotential_correct(r, x(r), mu, rho) from r0 until
 // |r_{i+1} - r_i| <= tol |r_{i+1}| (or no change) or max_iterations updates. x_of(r) is the
 // contact's local compliance: x_free + w r (solve_local below), or x_base + W_kk r with the
-// implicit scheme's condensed block W_kk (schemes/implicit.cpp).
+// implicit scheme's condensed block W_kk (condensed_contact.hpp).
 template <class Pair>
 struct LocalSolutionT {
   Pair r;

@@ -40,23 +40,6 @@ double internal_force_roundoff(const M& model) {
 }  // namespace
 namespace {
 
-template <int N>
-bool same_stencil(const StencilN<N>& a, const StencilN<N>& b) {
-  if (a.count != b.count) return false;
-  for (int j = 0; j < a.count; ++j)
-    if (a.node[j] != b.node[j] || a.coef[j] != b.coef[j]) return false;
-  return true;
-}
-
-// Component d of a contact's local vector: 0 the normal, 1 (and 2 in 3D) the tangential ones,
-// in the order of its frame's directions (n, t) or (n, t1, t2).
-inline double component(const LocalPair& r, int d) { return d == 0 ? r.n : r.t; }
-inline double component(const LocalPair3d& r, int d) { return d == 0 ? r.n : r.t[d - 1]; }
-inline void set_component(LocalPair& r, int d, double x) { (d == 0 ? r.n : r.t) = x; }
-inline void set_component(LocalPair3d& r, int d, double x) { (d == 0 ? r.n : r.t[d - 1]) = x; }
-// Direction d of the frame of normal n: n, t (2D), or n, t1, t2 (3D).
-inline Vec2 frame_direction(const ContactFrame<2>& f, int d) { return d == 0 ? f.n : f.t; }
-inline Vec3 frame_direction(const ContactFrame<3>& f, int d) { return d == 0 ? f.n : d == 1 ? f.t1 : f.t2; }
 // The diagonal of A at a node, for the local compliance estimate: the mean over its DOFs.
 inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::integral_constant<int, 2>) {
   return 0.5 / inv_diag[2 * node] + 0.5 / inv_diag[2 * node + 1];
@@ -76,26 +59,16 @@ ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& r
       system_(make_system_matrix(model), model.mass, run.prescribed, settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement, run.loads);
   contact_ = make_contact_set(model, obstacles_, run.friction, run.prescribed, run.body_pairs);
-  x_free_.assign(contact_.candidates.size(), {});
-  weight_.assign(contact_.candidates.size(), 0.0);
+  condensed_.reserve(contact_, model.num_dofs());
+  engaged_.assign(contact_.candidates.size(), 0);
   force_roundoff_ = internal_force_roundoff(model);
   const int n = model.num_dofs();
-  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_, &y_,
-                             &impulse_, &prescribed_v_})
+  for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
+                             &prescribed_v_})
     v->setZero(n);
   s_.a.setZero();
   s_.forces = internal_forces(model, s_.u.data(), s_.v_half.data(), s_.f_int.data(), true);
   residuals_.reserve(set_.max_newton_iterations + 1);
-  const int directions = contact_.any_friction ? D : 1;
-  const int slots = directions * static_cast<int>(contact_.candidates.size());
-  columns_.resize(n, slots);
-  column_factor_.assign(slots, -1);
-  column_direction_.assign(slots, Vec::Zero());
-  column_stencil_.assign(slots, Stencil{});
-  active_columns_.reserve(slots);
-  w_.resize(slots, slots);
-  engaged_.assign(contact_.candidates.size(), 0);
-  r_vec_.resize(slots);
 }
 
 template <class M>
@@ -115,7 +88,7 @@ double ImplicitIntegratorT<M>::residual(bool with_energy) {
   const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
   s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
-  g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * impulse_;
+  g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * condensed_.impulse();
   // Nodal loads, xi-averaged like the other forces: dt [(1 - xi) F(t_n) + xi F(t_n+1)].
   for (const LoadedDof& l : s_.loads) g_[l.load.dof] -= dt * load_average(l.load);
   for (const auto& p : run_.prescribed) {
@@ -131,7 +104,7 @@ double ImplicitIntegratorT<M>::residual(bool with_energy) {
   scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
                      model_.mass.cwiseProduct(v0_).template lpNorm<Eigen::Infinity>(),
                      dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
-                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * impulse_.lpNorm<Eigen::Infinity>(),
+                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * condensed_.impulse().template lpNorm<Eigen::Infinity>(),
                      dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
   const double scale = scale_;
   return g_.lpNorm<Eigen::Infinity>() / scale;
@@ -154,7 +127,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   const bool shifted = position && run_.contact.frame_updates > 0;
   auto x_pred = [&](int j) -> Vec {
     if (!shifted) return model_.ref.col(j) + u_pred(j);
-    return model_.ref.col(j) + u_pred(j) + c * y_.template segment<D>(D * j);
+    return model_.ref.col(j) + u_pred(j) + c * condensed_.response().template segment<D>(D * j);
   };
   update_boxes(cs, x_pred);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
@@ -170,7 +143,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
     double gap = oc.gap;
     if (shifted) {
       Vec shift = Vec::Zero();
-      for (int j = 0; j < st.count; ++j) shift += st.coef[j] * y_.template segment<D>(D * st.node[j]);
+      for (int j = 0; j < st.count; ++j) shift += st.coef[j] * condensed_.response().template segment<D>(D * st.node[j]);
       gap -= c * oc.normal.dot(shift);
     }
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
@@ -191,24 +164,23 @@ bool ImplicitIntegratorT<M>::solve_contact() {
       const double a_jj = node_diagonal(system_.inverse_diagonal(), node, std::integral_constant<int, D>{});
       compliance += st.coef[j] * st.coef[j] / a_jj;
     }
-    x_free_[k] = position ? Local{gap, frame.tangential(du)} : frame.local(v_rel);
-    weight_[k] = c * dt * compliance;
+    condensed_.set_local(k, position ? Local{gap, frame.tangential(du)} : frame.local(v_rel), c * dt * compliance);
     cs.active.push_back(k);
   }
   if (cs.active.empty()) {
-    impulse_.setZero();
-    y_.setZero();
-    contact_sweeps_ = 0;
+    condensed_.clear();
     return true;
   }
-  contact_converged_ = system_.direct() ? false : uzawa_contact(c);
-  // As in the semi-explicit scheme, Gauss-Seidel that reaches contact.max_sweeps leaves its last
-  // iterate: the step goes on and is counted in unconverged_steps. Only a failed linear solve
-  // stops the run.
-  if (!contact_converged_) {
-    if (!exact_contact(c)) return false;
-    if (!contact_converged_) step_unconverged_ = true;
-  }
+  // Uzawa with CG (ImplicitSettings::uzawa_sweeps), the exact W with the factor or when Uzawa
+  // does not converge. As in the semi-explicit scheme, Gauss-Seidel that reaches
+  // contact.max_sweeps leaves its last iterate: the step goes on and is counted in
+  // unconverged_steps. Only a failed linear solve stops the run.
+  auto solve_a = [this](const Eigen::VectorXd& b, Eigen::VectorXd& x) { return solve(b, x); };
+  const double tol = run_.contact.tolerance;
+  if (!system_.direct() && condensed_.uzawa(cs, c, dt, set_.uzawa_sweeps, tol, solve_a)) return true;
+  if (!condensed_.exact(cs, c, dt, run_.contact.max_sweeps, tol, solve_a, system_.direct() ? system_.factor_id() : -1))
+    return false;
+  if (!condensed_.converged()) step_unconverged_ = true;
   return true;
 }
 
@@ -226,178 +198,6 @@ bool ImplicitIntegratorT<M>::engage_penetrating() {
   return any;
 }
 
-// The reactions of the active contacts as nodal forces (the stencil of each contact).
-template <class M>
-void ImplicitIntegratorT<M>::build_impulse() {
-  impulse_.setZero();
-  for (int k : contact_.active) add_reaction(k);
-}
-
-template <class M>
-void ImplicitIntegratorT<M>::add_reaction(int k) {
-  const Vec r = ContactFrame<D>(contact_.normal[k]).global(contact_.reaction[k]);
-  const Stencil& st = contact_.stencil[k];
-  for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
-}
-
-// (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
-template <class M>
-typename ImplicitIntegratorT<M>::Local ImplicitIntegratorT<M>::stencil_dot(int k, const Eigen::VectorXd& y) const {
-  const Stencil& st = contact_.stencil[k];
-  Vec sum = Vec::Zero();
-  for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.template segment<D>(D * st.node[j]);
-  return ContactFrame<D>(contact_.normal[k]).local(sum);
-}
-
-// Uzawa sweeps: x(R) exact through one solve of A per sweep, rho = omega / w with w the
-// diagonal estimate of the local compliance; omega halves whenever the largest reaction
-// change grows. Fast when A is mass-dominated (W nearly diagonal).
-template <class M>
-bool ImplicitIntegratorT<M>::uzawa_contact(double c) {
-  ContactSetT<D>& cs = contact_;
-  const double dt = s_.dt;
-  double omega = 1.0, last_change = 1e300;
-  for (contact_sweeps_ = 1; contact_sweeps_ <= set_.uzawa_sweeps; ++contact_sweeps_) {
-    build_impulse();
-    rhs_ = dt * impulse_;
-    if (!solve(rhs_, y_)) return false;
-    double change = 0.0, size = 0.0;
-    for (int k : cs.active) {
-      const ContactCandidate& cc = cs.candidates[k];
-      const Local hy = stencil_dot(k, y_);
-      const Local x{x_free_[k].n + c * hy.n, x_free_[k].t + c * hy.t};
-      const double rho = omega / weight_[k];
-      Local& r = cs.reaction[k];
-      const Local next = bipotential_correct(r, x, cc.friction_coeff, rho);
-      change = std::max(change, local_distance(next, r));
-      size = std::max(size, local_norm(next));
-      r = next;
-    }
-    if (change <= run_.contact.tolerance * size || change == 0.0) {
-      build_impulse();
-      rhs_ = dt * impulse_;
-      return solve(rhs_, y_);
-    }
-    if (change > last_change) omega *= 0.5;
-    last_change = change;
-  }
-  return false;
-}
-
-// The condensed problem with the exact W = c dt H A^-1 H^T, built from one column solve per
-// active contact direction, then Gauss-Seidel over the contacts with each contact's local
-// problem solved by the bi-potential iteration on its own W block. y = dt A^-1 H^T R is a
-// combination of the same columns. On the direct path a column computed with the current factor
-// for the same stencil and direction is reused: with modified Newton the factor, and on a rigid
-// plane the directions, stay the same over many iterations and steps. Returns false only when a
-// linear solve fails; whether Gauss-Seidel converged within contact.max_sweeps is
-// contact_converged_.
-template <class M>
-bool ImplicitIntegratorT<M>::column_cached(int slot, const Stencil& st, const Vec& direction) const {
-  return system_.direct() && column_factor_[slot] == system_.factor_id() && column_direction_[slot] == direction &&
-         same_stencil(column_stencil_[slot], st);
-}
-
-template <class M>
-bool ImplicitIntegratorT<M>::exact_contact(double c) {
-  ContactSetT<D>& cs = contact_;
-  const double dt = s_.dt;
-  const int dirs = cs.any_friction ? D : 1;
-  const int m = dirs * static_cast<int>(cs.active.size());
-  ++exact_contact_solves_;
-  contact_converged_ = false;
-  auto direction = [&](int a) -> Vec {
-    return frame_direction(ContactFrame<D>(cs.normal[cs.active[a / dirs]]), a % dirs);
-  };
-  active_columns_.clear();
-  for (int a = 0; a < m; ++a) {
-    const int slot = dirs * cs.active[a / dirs] + a % dirs;
-    active_columns_.push_back(slot);
-    const Stencil& st = cs.stencil[cs.active[a / dirs]];
-    const Vec d = direction(a);
-    if (column_cached(slot, st, d)) continue;
-    rhs_.setZero();
-    for (int j = 0; j < st.count; ++j) rhs_.template segment<D>(D * st.node[j]) += st.coef[j] * d;
-    y_.setZero();
-    if (!solve(rhs_, y_)) return false;
-    columns_.col(slot) = y_;
-    column_factor_[slot] = system_.direct() ? system_.factor_id() : -1;
-    column_direction_[slot] = d;
-    column_stencil_[slot] = st;
-  }
-  for (int a = 0; a < m; ++a) {
-    const Stencil& st = cs.stencil[cs.active[a / dirs]];
-    for (int b = 0; b < m; ++b) {
-      double h = 0.0;
-      for (int j = 0; j < st.count; ++j)
-        h += st.coef[j] * direction(a).dot(columns_.col(active_columns_[b]).template segment<D>(D * st.node[j]));
-      w_(a, b) = c * dt * h;
-    }
-  }
-
-  const double tol = run_.contact.tolerance;
-  // Inside a sweep, a contact's local problem (with its block W_kk, anisotropic in friction) is
-  // solved to kLocalTolerance times the sweep's tolerance, so that what is left of it is not taken
-  // for a change between sweeps, in at most kLocalMaxUpdates updates (an unfinished one goes on in
-  // the next sweep, from where it stopped). Our choice: Cros, Feng & Magnain (2010) do not say
-  // how the implicit scheme's local problems are solved (docs/implicit.md).
-  constexpr double kLocalTolerance = 1e-3;
-  constexpr int kLocalMaxUpdates = 200;
-  for (contact_sweeps_ = 1; contact_sweeps_ <= run_.contact.max_sweeps; ++contact_sweeps_) {
-    double change = 0.0, size = 0.0;
-    for (int i = 0; i < static_cast<int>(cs.active.size()); ++i) {
-      const int k = cs.active[i];
-      const double mu = cs.candidates[k].friction_coeff;
-      Local& r = cs.reaction[k];
-      // x = x_base + W_kk r, x_base = x_free + sum over the other contacts (row d of W: the
-      // contact's direction d, in the order of its frame).
-      Local base = x_free_[k];
-      for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
-        if (j == i) continue;
-        const Local rj = cs.reaction[cs.active[j]];
-        for (int d = 0; d < dirs; ++d) {
-          double sum = w_(dirs * i + d, dirs * j) * rj.n;
-          for (int e = 1; e < dirs; ++e) sum += w_(dirs * i + d, dirs * j + e) * component(rj, e);
-          set_component(base, d, component(base, d) + sum);
-        }
-      }
-      Local next{};
-      if (dirs == 1) {
-        next.n = std::max(0.0, -base.n / w_(i, i));
-      } else {
-        double w_max = w_(dirs * i, dirs * i);
-        for (int d = 1; d < dirs; ++d) w_max = std::max(w_max, w_(dirs * i + d, dirs * i + d));
-        const double rho = 1.0 / w_max;
-        auto x_of = [&](const Local& q) {
-          Local x = base;
-          for (int d = 0; d < dirs; ++d) {
-            double xd = component(base, d);
-            for (int e = 0; e < dirs; ++e) xd += w_(dirs * i + d, dirs * i + e) * component(q, e);
-            set_component(x, d, xd);
-          }
-          return x;
-        };
-        next = solve_local_map(x_of, mu, rho, r, kLocalTolerance * tol, kLocalMaxUpdates).r;
-      }
-      change = std::max(change, local_distance(next, r));
-      size = std::max(size, local_norm(next));
-      r = next;
-    }
-    if (change <= tol * size || change == 0.0) {
-      contact_converged_ = true;
-      break;
-    }
-  }
-  contact_sweeps_ = std::min(contact_sweeps_, run_.contact.max_sweeps);
-  for (int a = 0; a < m; ++a) {
-    r_vec_[a] = dt * component(cs.reaction[cs.active[a / dirs]], a % dirs);
-  }
-  y_.setZero();
-  for (int a = 0; a < m; ++a) y_.noalias() += r_vec_[a] * columns_.col(active_columns_[a]);
-  build_impulse();
-  return true;
-}
-
 template <class M>
 bool ImplicitIntegratorT<M>::step(bool with_energy) {
   u0_ = s_.u;
@@ -405,9 +205,8 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
   f0_ = s_.f_int;
   const double hourglass_power0 = s_.forces.hourglass_power;
   predict(s_.step > 0 && s_.dt <= model_.critical_dt);
-  impulse_.setZero();
   // The last step's reactions in the frame (and on the stencil) they were solved in.
-  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) add_reaction(static_cast<int>(k));
+  condensed_.impulse_of_all(contact_);
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
   residuals_.clear();
   step_unconverged_ = false;
@@ -481,18 +280,16 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     }
     system_.count_iteration();
     const double r_before = r;
-    rhs_ = -(g_ + dt * impulse_);  // the residual without the contact reactions
+    rhs_ = -(g_ + dt * condensed_.impulse());  // the residual without the contact reactions
     dv_free_.setZero();
     if (!solve(rhs_, dv_free_)) return false;
     if (!contact_.candidates.empty()) {
       if (!solve_contact()) return false;
-      sweeps = std::max(sweeps, contact_sweeps_);
-    } else {
-      y_.setZero();
+      sweeps = std::max(sweeps, condensed_.sweeps());
+      dv_free_ += condensed_.response();
     }
     // Backtracking: the full Newton update unless it inverts an element or is not finite
     // (large steps on coarse stiff problems); then halve it, up to 10 times.
-    dv_free_ += y_;
     v_base_ = v1_;
     double alpha = 1.0;
     for (int ls = 0;; ++ls) {

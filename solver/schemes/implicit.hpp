@@ -7,13 +7,16 @@
 // CHOLMOD Cholesky factor reused across Newton iterations and steps (modified Newton). Contact
 // reactions R at t1 come from the same bi-potential update as the semi-explicit scheme, on the
 // condensed problem x = x_free + W R with W = c H A^-1 H^T dt (c = dt theta at the position
-// level, 1 at the velocity level), by Uzawa sweeps in which x is evaluated exactly (one solve
-// of A per sweep), so the converged reactions satisfy the contact law exactly.
+// level, 1 at the velocity level; solver/contact/condensed_contact.hpp), so the converged
+// reactions satisfy the contact law exactly. The scheme is in three parts: this integrator
+// (predict -> Newton -> close the step), the linear system (implicit_system.hpp) and the
+// condensed contact problem.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "solver/contact/condensed_contact.hpp"
 #include "solver/contact/contact_set.hpp"
 #include "solver/schemes/implicit_system.hpp"
 #include "solver/schemes/run_types.hpp"
@@ -45,20 +48,14 @@ class ImplicitIntegratorT {
   long linear_iterations_total() const { return system_.cg_iterations(); }
   bool direct_solver() const { return system_.direct(); }
   long factorizations() const { return system_.factorizations(); }
-  long exact_contact_solves() const { return exact_contact_solves_; }
+  long exact_contact_solves() const { return condensed_.exact_solves(); }
   long shifted_iterations() const { return system_.shifted_factorizations(); }
 
  private:
   double residual(bool with_energy);  // G at (u1, v1) into g_, returns its relative inf-norm
   double load_average(const NodalLoad& l) const;  // (1 - xi) F(t_n) + xi F(t_n+1) [N]
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  bool solve_contact();  // from dv_free_, fills y_ and contact_.reaction
-  bool uzawa_contact(double c);        // true if it converged
-  bool exact_contact(double c);        // condensed W by column solves, Gauss-Seidel (false: a linear solve failed)
-  bool column_cached(int slot, const Stencil& st, const Vec& direction) const;
-  void build_impulse();
-  void add_reaction(int k);                                  // candidate k's reaction into impulse_
-  Local stencil_dot(int k, const Eigen::VectorXd& y) const;  // (n, t) . sum_j coef_j y_j
+  bool solve_contact();  // from dv_free_: the reactions into contact_, their response into condensed_
   void predict(bool extrapolate);           // v1 of the step's first iterate
   bool newton(double r, int& sweeps);       // the iterations to the converged v1
   void close_step(double hourglass_power0, int sweeps);  // bookkeeping; u1, v1 become the state
@@ -70,31 +67,15 @@ class ImplicitIntegratorT {
   ImplicitSettings set_;
   State s_;
   ContactSetT<D> contact_;
-  ImplicitSystem system_;  // A, its factor or CG, the refactorization rule
-  // Per candidate, the local problem x = x_free + w r of the current Newton iterate (w: the
-  // diagonal estimate of the local compliance).
-  std::vector<Local> x_free_;
-  std::vector<double> weight_;
-  int contact_sweeps_ = 0;           // sweeps of the last contact solve
-  bool contact_converged_ = true;    // the last contact solve met its tolerance
-  // A^-1 H^T e per contact candidate k and direction d (normal, then the tangents) in column
-  // dirs k + d (Dn x dirs candidates). On the direct path a column is reused while the factor,
-  // the candidate's stencil and its direction are those it was computed with.
-  Eigen::MatrixXd columns_;
-  std::vector<long> column_factor_;      // factor_id_ of each column, -1: none
-  std::vector<Vec, Eigen::aligned_allocator<Vec>> column_direction_;
-  std::vector<Stencil> column_stencil_;
-  std::vector<int> active_columns_;      // column of each active contact direction
-  Eigen::MatrixXd w_;         // condensed compliance (m x m)
+  ImplicitSystem system_;        // A, its factor or CG, the refactorization rule
+  CondensedContact<D> condensed_;  // R on x = x_free + W R; H^T R and its response A^-1 dt H^T R
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
-  Eigen::VectorXd r_vec_;     // dt R per active contact direction
-  Eigen::VectorXd v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, y_, impulse_, prescribed_v_;
+  Eigen::VectorXd v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, prescribed_v_;
   std::vector<double> residuals_;
   std::string failure_;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
   double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
   long newton_total_ = 0;
-  long exact_contact_solves_ = 0;
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 

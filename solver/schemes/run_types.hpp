@@ -5,7 +5,9 @@
 
 #include <array>
 #include <functional>
+#include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "solver/contact/contact_set.hpp"
@@ -48,6 +50,13 @@ struct RelaxationReport {
   std::string reason;         // why it did not converge
 };
 
+// The rigid obstacles of a run, all of its model's dimension: shapes of contact/obstacle.hpp for
+// a Model<2>, of contact/obstacle3.hpp for a Model<3>.
+using ObstacleList = std::variant<std::vector<Obstacle>, std::vector<Obstacle3>>;
+inline std::size_t obstacle_count(const ObstacleList& l) {
+  return std::visit([](const auto& v) { return v.size(); }, l);
+}
+
 struct RunSettings {
   double dt = 0.0;                  // fixed time step [s]; with a variable step, the first one
   double end_time = 0.0;            // [s]; the run takes ceil(end_time/dt) steps (fixed step)
@@ -80,8 +89,7 @@ struct RunSettings {
   // contact_phase() between evaluate and update) or by penalty springs (the explicit penalty
   // scheme); the implicit scheme by its condensed bi-potential problem.
   enum class ContactMethod { bipotential, penalty };
-  std::vector<Obstacle> obstacles;
-  std::vector<Obstacle3> obstacles3;  // the same for a 3D model (Model<3>)
+  ObstacleList obstacles;  // of the model's dimension; obstacles_of(), obstacles_in() below
   std::vector<std::vector<double>> friction;
   // Contact between bodies, node to segment (body_contact.hpp), treated by the same method.
   std::vector<BodyPair> body_pairs;
@@ -96,9 +104,28 @@ struct RunSettings {
   PenaltySettings penalty;
 };
 
-// The rigid obstacles of a run, of the model type's dimension (2D: RunSettings::obstacles).
-inline const std::vector<Obstacle>& obstacles_of(const RunSettings& s, const Model<2>&) { return s.obstacles; }
-inline const std::vector<Obstacle3>& obstacles_of(const RunSettings& s, const Model<3>&) { return s.obstacles3; }
+// The rigid obstacles of a run for a model of type M: RunSettings::obstacles as the list of
+// M's dimension. A list of the other dimension is an error unless it is empty (a run without
+// obstacles).
+template <class M>
+const std::vector<ObstacleOf<M>>& obstacles_of(const RunSettings& s, const M&) {
+  if (const auto* list = std::get_if<std::vector<ObstacleOf<M>>>(&s.obstacles)) return *list;
+  if (!obstacle_count(s.obstacles)) {
+    static const std::vector<ObstacleOf<M>> none;
+    return none;
+  }
+  throw std::invalid_argument("run settings: obstacles of another dimension than the model's");
+}
+// The same list to fill: an empty list of the other dimension becomes one of M's.
+template <class M>
+std::vector<ObstacleOf<M>>& obstacles_in(RunSettings& s, const M&) {
+  if (!std::holds_alternative<std::vector<ObstacleOf<M>>>(s.obstacles)) {
+    if (obstacle_count(s.obstacles))
+      throw std::invalid_argument("run settings: obstacles of another dimension than the model's");
+    s.obstacles.template emplace<std::vector<ObstacleOf<M>>>();
+  }
+  return std::get<std::vector<ObstacleOf<M>>>(s.obstacles);
+}
 
 enum class RunStatus { ok, diverged };
 

@@ -56,7 +56,7 @@ struct DiskRun {
 DiskRun run_disk(std::vector<std::string> overrides) {
   const PreparedCase pc = prepare_case(read_case(kCase, overrides));
   DiskRun r;
-  r.mass = 0.5 * pc.model.mass.sum();  // lumped mass per DOF, two DOFs per node
+  r.mass = 0.5 * pc.model<2>().mass.sum();  // lumped mass per DOF, two DOFs per node
   r.result = run_case(pc);
   return r;
 }

@@ -48,15 +48,15 @@ const PlateRun& plate_run(const std::string& mesh, double dt, double mu) {
   PlateRun run;
   run.prepared = prepare_case(spec);
   run.prepared.settings.sample_interval = 0.0;  // every step: rows pair with their reactions
-  run.mass = 0.5 * run.prepared.model.mass.sum();
-  run.result = run_explicit(run.prepared.model, run.prepared.settings);
+  run.mass = 0.5 * run.prepared.model<2>().mass.sum();
+  run.result = run_explicit(run.prepared.model<2>(), run.prepared.settings);
   const RunResult& r = run.result;
   std::printf("[plate] %s dt %.0e mu %.1f: %s, steps %ld/%ld, critical dt %.3e s, energy error max "
               "%.4e, von Mises max %.4e Pa at %.3e s, penetration max %.3e m, friction "
               "dissipation %.4e J, contact work %.4e J, E0 %.4e J, sweeps mean %.2f max %d, "
               "wall %.2f s\n",
               mesh.c_str(), dt, mu, r.status == RunStatus::ok ? "ok" : "diverged", r.steps,
-              r.planned_steps, run.prepared.model.critical_dt, r.energy_error_max,
+              r.planned_steps, run.prepared.model<2>().critical_dt, r.energy_error_max,
               r.stress.von_mises_max, r.stress.von_mises_max_time, r.penetration_max, r.friction_dissipation,
               r.contact_work, r.initial_energy, r.contact.sweeps_mean, r.contact.sweeps_max,
               r.timing.wall_seconds);
@@ -130,7 +130,7 @@ TEST(ObliquePlate, DivergenceFollowsTheCriticalStep) {
   for (const Case& c : cases) {
     const PlateRun& run = plate_run(c.mesh, c.dt, 0.0);
     const RunResult& r = run.result;
-    const double critical = run.prepared.model.critical_dt;
+    const double critical = run.prepared.model<2>().critical_dt;
     SCOPED_TRACE(std::string(c.mesh) + " dt " + number(c.dt) + " critical " + number(critical));
     if (c.diverges) {
       EXPECT_EQ(r.status, RunStatus::diverged);
@@ -216,7 +216,7 @@ TEST(ObliquePlate, EnergyBookkeepingClosesAtEveryRow) {
       residual_with_d =
           std::max(residual_with_d, std::abs(h.at(row, e) + h.at(row, d) - e0 - h.at(row, w)) / e0);
     }
-    const double bound = 5.0 * 0.125 * 25.0 / (0.5 * 34.0) / run.prepared.model.num_nodes();
+    const double bound = 5.0 * 0.125 * 25.0 / (0.5 * 34.0) / run.prepared.model<2>().num_nodes();
     std::printf("[plate] %s dt %.0e mu %.1f: max |E - E0 - W_c| / E0 = %.3e (bound %.2e; after the "
                 "contact %.3e), max |E + D - E0 - W_c| / E0 = %.3e, W_c / E0 = %.3e, D / E0 = %.3e\n",
                 c.mesh, c.dt, c.mu, residual, bound, after, residual_with_d, r.contact_work / e0,

@@ -44,17 +44,17 @@ double chord_deficit(int nx) {
 TEST(Reference, MassAndInitialStateMatchTheClosedForm) {
   for (const auto& [mesh, nx] : {std::pair{std::string("M1"), 12}, std::pair{std::string("M2"), 36}}) {
     const PreparedCase pc = plate(mesh);
-    const double mass = 0.5 * pc.model.mass.sum();  // x and y DOFs both carry the node mass
+    const double mass = 0.5 * pc.model<2>().mass.sum();  // x and y DOFs both carry the node mass
     const double rel = (value("body", "mass") - mass) / value("body", "mass");
     // The mesh loses exactly the chord deficit (1e-9: round-off of sums over ~3400 nodes).
     EXPECT_NEAR(rel, chord_deficit(nx), 1e-9) << mesh;
 
     Vec2 p = Vec2::Zero();
     double kinetic = 0.0;
-    for (int i = 0; i < pc.model.num_nodes(); ++i) {
-      const Vec2 v = pc.model.initial_velocity.segment<2>(2 * i);
-      p += pc.model.mass[2 * i] * v;
-      kinetic += 0.5 * pc.model.mass[2 * i] * v.squaredNorm();
+    for (int i = 0; i < pc.model<2>().num_nodes(); ++i) {
+      const Vec2 v = pc.model<2>().initial_velocity.segment<2>(2 * i);
+      p += pc.model<2>().mass[2 * i] * v;
+      kinetic += 0.5 * pc.model<2>().mass[2 * i] * v.squaredNorm();
     }
     const auto& m0 = *analytic()["body"]["momentum"].as_array();
     EXPECT_NEAR(p.x() / *m0[0].value<double>() - 1.0, -chord_deficit(nx), 1e-9) << mesh;
@@ -65,11 +65,11 @@ TEST(Reference, MassAndInitialStateMatchTheClosedForm) {
 
 TEST(Reference, WaveSpeedAndSagitta) {
   const PreparedCase pc = plate("M1");
-  EXPECT_NEAR(material_wave_speed(pc.model.bodies[0].material), value("waves", "plane_stress_dilatational"), 1e-12);
+  EXPECT_NEAR(material_wave_speed(pc.model<2>().bodies[0].material), value("waves", "plane_stress_dilatational"), 1e-12);
   // The lowest arc node is at the origin and the bottom corners at height s.
   double corner_y = 1.0;
-  for (int i = 0; i < pc.model.num_nodes(); ++i)
-    if (std::abs(std::abs(pc.model.ref(0, i)) - 0.02) < 1e-15) corner_y = std::min(corner_y, pc.model.ref(1, i));
+  for (int i = 0; i < pc.model<2>().num_nodes(); ++i)
+    if (std::abs(std::abs(pc.model<2>().ref(0, i)) - 0.02) < 1e-15) corner_y = std::min(corner_y, pc.model<2>().ref(1, i));
   EXPECT_NEAR(corner_y, value("geometry", "sagitta"), 1e-15);
 }
 

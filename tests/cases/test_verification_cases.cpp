@@ -35,7 +35,7 @@ std::vector<double> column(const History& h, const std::string& name) {
 
 RunResult run(const std::string& file, const std::vector<std::string>& overrides, double* mass) {
   const PreparedCase pc = prepare_case(read_case(kDir + file, overrides));
-  *mass = 0.5 * pc.model.mass.sum();  // lumped mass per DOF, two DOFs per node
+  *mass = 0.5 * pc.model<2>().mass.sum();  // lumped mass per DOF, two DOFs per node
   return run_case(pc);
 }
 

@@ -92,23 +92,23 @@ TEST(Case3, DimensionComesFromTheMeshes) {
   EXPECT_EQ(box.dimension, 3);
   const PreparedCase pc = prepare_case(box);
   EXPECT_EQ(pc.dimension(), 3);
-  EXPECT_EQ(pc.model3.num_cells(), 16);
-  EXPECT_EQ(pc.model3.num_nodes(), 45);
-  EXPECT_EQ(pc.model.num_nodes(), 0);  // the 2D model stays empty
-  EXPECT_EQ(pc.settings.obstacles3.size(), 1u);
-  EXPECT_TRUE(pc.settings.obstacles.empty());
+  EXPECT_EQ(pc.model<3>().num_cells(), 16);
+  EXPECT_EQ(pc.model<3>().num_nodes(), 45);
+  EXPECT_TRUE(std::holds_alternative<CaseBodies<3>>(pc.bodies));  // no 2D model beside it
+  EXPECT_EQ(obstacles_of(pc.settings, pc.model<3>()).size(), 1u);
+  EXPECT_TRUE(std::holds_alternative<std::vector<Obstacle3>>(pc.settings.obstacles));
   // The body's velocity on every node, in three components.
-  for (int i = 0; i < pc.model3.num_nodes(); ++i)
-    EXPECT_EQ(Vec3(pc.model3.initial_velocity.segment<3>(3 * i)), Vec3(1.0, -2.0, 0.5));
-  EXPECT_NEAR(pc.model3.mass.sum() / 3.0, 1000.0 * 0.02 * 0.01 * 0.01, 1e-15);
+  for (int i = 0; i < pc.model<3>().num_nodes(); ++i)
+    EXPECT_EQ(Vec3(pc.model<3>().initial_velocity.segment<3>(3 * i)), Vec3(1.0, -2.0, 0.5));
+  EXPECT_NEAR(pc.model<3>().mass.sum() / 3.0, 1000.0 * 0.02 * 0.01 * 0.01, 1e-15);
 
   // A 2D generator with extrude: 3D, the rectangle's cells through 3 layers, the box's nodes.
   CaseSpec ex = read(kBlock, {"meshes.m={generator = \"rectangle\", width = 0.02, height = 0.01, nx = 4, ny = 2, "
                               "origin = [0.0, 0.001], extrude = {thickness = 0.01, layers = 2}}"});
   EXPECT_EQ(ex.dimension, 3);
   const PreparedCase pe = prepare_case(ex);
-  EXPECT_EQ(pe.model3.num_cells(), 16);
-  EXPECT_EQ(pe.model3.ref, pc.model3.ref);  // the extruded rectangle is the box, bit for bit
+  EXPECT_EQ(pe.model<3>().num_cells(), 16);
+  EXPECT_EQ(pe.model<3>().ref, pc.model<3>().ref);  // the extruded rectangle is the box, bit for bit
 
   // A 3D Gmsh file (one tetrahedron) is 3D; the same case with a 2D one would be 2D.
   const fs::path msh = fs::temp_directory_path() / ("ricochet_case3_tet_" + std::to_string(getpid()) + ".msh");
@@ -116,7 +116,7 @@ TEST(Case3, DimensionComesFromTheMeshes) {
                         "3 0 0.011 0\n4 0 0.001 0.01\n$EndNodes\n$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n";
   const CaseSpec g = read(kBlock, {"meshes.m={file = \"" + msh.string() + "\"}"});
   EXPECT_EQ(g.dimension, 3);
-  EXPECT_EQ(prepare_case(g).model3.num_cells(), 1);
+  EXPECT_EQ(prepare_case(g).model<3>().num_cells(), 1);
   fs::remove(msh);
 }
 
@@ -181,16 +181,16 @@ TEST(Case3, ThreeDimensionalSetUp) {
       prepare_case(read(kBlock, {"meshes.m.rotate=90.0", "meshes.m.rotate_axis=[2.0, 0.0, 0.0]",
                                  "meshes.m.offset=[0.0, 0.03, 0.0]"}));
   const PreparedCase plain = prepare_case(read(kBlock));
-  for (int i = 0; i < plain.model3.num_nodes(); ++i) {
-    const Vec3 x = plain.model3.ref.col(i);
-    EXPECT_LT((Vec3(turned.model3.ref.col(i)) - Vec3(x.x(), -x.z() + 0.03, x.y())).norm(), 1e-15) << i;
+  for (int i = 0; i < plain.model<3>().num_nodes(); ++i) {
+    const Vec3 x = plain.model<3>().ref.col(i);
+    EXPECT_LT((Vec3(turned.model<3>().ref.col(i)) - Vec3(x.x(), -x.z() + 0.03, x.y())).norm(), 1e-15) << i;
   }
   // v = velocity + omega x (x - c), c the centre of mass (here the box's centre).
   const Vec3 w(10.0, -20.0, 30.0), c(0.01, 0.006, 0.005);
   const PreparedCase spin = prepare_case(read(kBlock, {"bodies[0].angular_velocity=[10.0, -20.0, 30.0]"}));
-  for (int i = 0; i < spin.model3.num_nodes(); ++i) {
-    const Vec3 expected = Vec3(1.0, -2.0, 0.5) + w.cross(Vec3(spin.model3.ref.col(i)) - c);
-    EXPECT_LT((Vec3(spin.model3.initial_velocity.segment<3>(3 * i)) - expected).norm(), 1e-14) << i;
+  for (int i = 0; i < spin.model<3>().num_nodes(); ++i) {
+    const Vec3 expected = Vec3(1.0, -2.0, 0.5) + w.cross(Vec3(spin.model<3>().ref.col(i)) - c);
+    EXPECT_LT((Vec3(spin.model<3>().initial_velocity.segment<3>(3 * i)) - expected).norm(), 1e-14) << i;
   }
   // Node sets of the box: left (x = 0, 9 nodes), back (z = 0, 15 nodes).
   const PreparedCase set = prepare_case(
@@ -198,11 +198,11 @@ TEST(Case3, ThreeDimensionalSetUp) {
                     "boundary=[{nodes = \"back\", z = 0.0}]",
                     "loads=[{nodes = \"left\", force = [0.0, 0.0, 9.0], distribution = \"equal\"}]",
                     "gravity=[0.0, 0.0, -9.81]"}));
-  const std::vector<int>& left = set.meshes3[0].node_sets.at("left");
-  const std::vector<int>& back = set.meshes3[0].node_sets.at("back");
+  const std::vector<int>& left = set.meshes<3>()[0].node_sets.at("left");
+  const std::vector<int>& back = set.meshes<3>()[0].node_sets.at("back");
   ASSERT_EQ(left.size(), 9u);
   ASSERT_EQ(back.size(), 15u);
-  for (int i : left) EXPECT_EQ(Vec3(set.model3.initial_velocity.segment<3>(3 * i)), Vec3(0.0, 0.0, 3.0));
+  for (int i : left) EXPECT_EQ(Vec3(set.model<3>().initial_velocity.segment<3>(3 * i)), Vec3(0.0, 0.0, 3.0));
   ASSERT_EQ(set.settings.prescribed.size(), back.size());  // z only
   for (std::size_t k = 0; k < back.size(); ++k) EXPECT_EQ(set.settings.prescribed[k].dof, 3 * back[k] + 2);
   ASSERT_EQ(set.settings.loads.size(), left.size());  // z only, 1 N each
@@ -210,7 +210,7 @@ TEST(Case3, ThreeDimensionalSetUp) {
     EXPECT_EQ(set.settings.loads[k].dof, 3 * left[k] + 2);
     EXPECT_DOUBLE_EQ(set.settings.loads[k].value, 1.0);
   }
-  EXPECT_EQ(set.model3.gravity, Vec3(0.0, 0.0, -9.81));
+  EXPECT_EQ(set.model<3>().gravity, Vec3(0.0, 0.0, -9.81));
 }
 
 // A slave node that starts inside its contact pair's master body is an input error naming the
@@ -295,15 +295,15 @@ TEST(Case3, SceneRotationTurnsEverything) {
   const PreparedCase plain = prepare_case(read(kBlock, plain_set));
   const PreparedCase turned = prepare_case(read(kBlock, turn));
   const Mat3 r = Eigen::AngleAxisd(50.0 * std::numbers::pi / 180.0, Vec3(1.0, 2.0, -1.5).normalized()).toRotationMatrix();
-  EXPECT_LT((turned.model3.ref - r * plain.model3.ref).cwiseAbs().maxCoeff(), 1e-17);
-  for (int i = 0; i < plain.model3.num_nodes(); ++i)
-    EXPECT_LT((Vec3(turned.model3.initial_velocity.segment<3>(3 * i)) -
-               r * Vec3(plain.model3.initial_velocity.segment<3>(3 * i))).norm(),
+  EXPECT_LT((turned.model<3>().ref - r * plain.model<3>().ref).cwiseAbs().maxCoeff(), 1e-17);
+  for (int i = 0; i < plain.model<3>().num_nodes(); ++i)
+    EXPECT_LT((Vec3(turned.model<3>().initial_velocity.segment<3>(3 * i)) -
+               r * Vec3(plain.model<3>().initial_velocity.segment<3>(3 * i))).norm(),
               1e-14);
-  EXPECT_LT((turned.model3.gravity - r * plain.model3.gravity).norm(), 1e-14);
-  EXPECT_LT((turned.settings.obstacles3[0].normal - r * Vec3::UnitY()).norm(), 1e-15);
-  EXPECT_EQ(turned.meshes3[0].node_sets.at("low"), plain.meshes3[0].node_sets.at("low"));
-  EXPECT_EQ(turned.meshes3[0].node_sets.at("low").size(), 15u);  // the bottom layer y = 0.001
+  EXPECT_LT((turned.model<3>().gravity - r * plain.model<3>().gravity).norm(), 1e-14);
+  EXPECT_LT((obstacles_of(turned.settings, turned.model<3>())[0].normal - r * Vec3::UnitY()).norm(), 1e-15);
+  EXPECT_EQ(turned.meshes<3>()[0].node_sets.at("low"), plain.meshes<3>()[0].node_sets.at("low"));
+  EXPECT_EQ(turned.meshes<3>()[0].node_sets.at("low").size(), 15u);  // the bottom layer y = 0.001
   EXPECT_EQ(turned.probes[0].node, plain.probes[0].node);
   EXPECT_NE(error_of(kBlock, {turn[0], "boundary=[{nodes = \"left\", x = 0.0}]"}).find("cannot be turned"),
             std::string::npos);

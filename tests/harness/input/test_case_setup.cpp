@@ -59,18 +59,18 @@ TEST(CaseSetup, GeneratedMeshesRotateAboutAPoint) {
   const PreparedCase turned = prepare(kRect, {"meshes.m.rotate=90", "meshes.m.rotate_about=[0.1, 0.0]",
                                               "meshes.m.offset=[1.0, 0.0]", "meshes.m.scale=2.0"});
   const PreparedCase zero = prepare(kRect, {"meshes.m.rotate=0", "meshes.m.rotate_about=[5.0, 5.0]"});
-  ASSERT_EQ(plain.model.num_nodes(), turned.model.num_nodes());
+  ASSERT_EQ(plain.model<2>().num_nodes(), turned.model<2>().num_nodes());
   const Vec2 c(0.1, 0.0), o(1.0, 0.0);
-  for (int i = 0; i < plain.model.num_nodes(); ++i) {
-    const Vec2 x = 2.0 * plain.model.ref.col(i);
+  for (int i = 0; i < plain.model<2>().num_nodes(); ++i) {
+    const Vec2 x = 2.0 * plain.model<2>().ref.col(i);
     const Vec2 expected = Vec2(-(x - c).y(), (x - c).x()) + c + o;
-    EXPECT_NEAR((turned.model.ref.col(i) - expected).norm(), 0.0, 1e-15) << "node " << i;
+    EXPECT_NEAR((turned.model<2>().ref.col(i) - expected).norm(), 0.0, 1e-15) << "node " << i;
   }
-  EXPECT_EQ(0, std::memcmp(plain.model.ref.data(), zero.model.ref.data(), sizeof(double) * plain.model.ref.size()));
+  EXPECT_EQ(0, std::memcmp(plain.model<2>().ref.data(), zero.model<2>().ref.data(), sizeof(double) * plain.model<2>().ref.size()));
   // A rotation keeps every cell's area, so the mass (scaled by 2^2) is the same.
-  EXPECT_NEAR(turned.model.mass.sum(), 4.0 * plain.model.mass.sum(), 1e-12 * plain.model.mass.sum());
+  EXPECT_NEAR(turned.model<2>().mass.sum(), 4.0 * plain.model<2>().mass.sum(), 1e-12 * plain.model<2>().mass.sum());
   // A tilted rectangle's critical step is that of the plain one scaled by 2.
-  EXPECT_NEAR(turned.model.critical_dt, 2.0 * plain.model.critical_dt, 1e-12 * plain.model.critical_dt);
+  EXPECT_NEAR(turned.model<2>().critical_dt, 2.0 * plain.model<2>().critical_dt, 1e-12 * plain.model<2>().critical_dt);
 }
 
 // angular_velocity spins a body about its centre of mass (or rotation_center): linear momentum
@@ -79,7 +79,7 @@ TEST(CaseSetup, BodiesStartSpinning) {
   const double omega = 30.0;
   const PreparedCase still = prepare(kRect);
   const PreparedCase spin = prepare(kRect, {"bodies[0].angular_velocity=30.0"});
-  const Model<2>& m = spin.model;
+  const Model<2>& m = spin.model<2>();
   Vec2 centre = Vec2::Zero(), p = Vec2::Zero();
   double mass = 0.0;
   for (int i = 0; i < m.num_nodes(); ++i) {
@@ -100,13 +100,13 @@ TEST(CaseSetup, BodiesStartSpinning) {
   // About a given point: v = v0 + omega x (x - c).
   const PreparedCase about = prepare(kRect, {"bodies[0].angular_velocity=30.0", "bodies[0].rotation_center=[0.0, 0.0]"});
   for (int i = 0; i < m.num_nodes(); ++i) {
-    const Vec2 x = about.model.ref.col(i);
+    const Vec2 x = about.model<2>().ref.col(i);
     const Vec2 expected = Vec2(1.0, -2.0) + omega * Vec2(-x.y(), x.x());
-    EXPECT_NEAR((about.model.initial_velocity.segment<2>(2 * i) - expected).norm(), 0.0, 1e-13) << "node " << i;
+    EXPECT_NEAR((about.model<2>().initial_velocity.segment<2>(2 * i) - expected).norm(), 0.0, 1e-13) << "node " << i;
   }
   // Without the key nothing changes.
   for (int i = 0; i < m.num_nodes(); ++i)
-    EXPECT_EQ(still.model.initial_velocity.segment<2>(2 * i), Vec2(1.0, -2.0));
+    EXPECT_EQ(still.model<2>().initial_velocity.segment<2>(2 * i), Vec2(1.0, -2.0));
   // A free spinning body keeps its angular momentum (the run's own history column).
   const RunResult r = run_case(spin);
   ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
@@ -128,8 +128,8 @@ nodes = "left"
 velocity = [0.0, 3.0]
 )";
   const PreparedCase pc = prepare(text);
-  const Model<2>& m = pc.model;
-  const Mesh& mesh = pc.meshes[0];
+  const Model<2>& m = pc.model<2>();
+  const Mesh& mesh = pc.meshes<2>()[0];
   std::vector<int> kind(m.num_nodes(), 0);
   for (int i : mesh.node_sets.at("top")) kind[i] = 1;
   for (int i : mesh.node_sets.at("left")) kind[i] = 2;
@@ -176,6 +176,6 @@ TEST(CaseSetup, DivergedRunKeepsItsLastState) {
   EXPECT_EQ(f.time, r.diverged_time);
   EXPECT_TRUE(f.u.allFinite());
   EXPECT_TRUE(f.v.allFinite());
-  ASSERT_EQ(f.von_mises.size(), static_cast<std::size_t>(pc.model.num_cells()));
+  ASSERT_EQ(f.von_mises.size(), static_cast<std::size_t>(pc.model<2>().num_cells()));
   EXPECT_GT(*std::max_element(f.von_mises.begin(), f.von_mises.end()), 0.0);
 }

@@ -223,19 +223,19 @@ TEST(Distort, CaseKeysApplyBeforeScaleAndOffset) {
   const PreparedCase none = prepare({});
   EXPECT_EQ(none.spec.meshes.at("m").distort, 0.0);
   EXPECT_EQ(none.spec.meshes.at("m").seed, 1u);
-  EXPECT_TRUE(bit_identical(none.meshes[0], plain));
+  EXPECT_TRUE(bit_identical(none.meshes<2>()[0], plain));
   const PreparedCase zero = prepare({"meshes.m.distort=0.0", "meshes.m.seed=9"});
-  EXPECT_TRUE(bit_identical(zero.meshes[0], plain));
+  EXPECT_TRUE(bit_identical(zero.meshes<2>()[0], plain));
 
   const PreparedCase seed1 = prepare({"meshes.m.distort=0.2"});
-  EXPECT_TRUE(bit_identical(seed1.meshes[0], distorted(plain, 0.2, 1)));
+  EXPECT_TRUE(bit_identical(seed1.meshes<2>()[0], distorted(plain, 0.2, 1)));
   const PreparedCase moved =
       prepare({"meshes.m.distort=0.2", "meshes.m.seed=7", "meshes.m.scale=2.0", "meshes.m.offset=[1.0, -1.0]"});
   Mesh expected = distorted(plain, 0.2, 7);
   expected.nodes *= 2.0;
   expected.nodes.colwise() += Vec2(1.0, -1.0);
-  EXPECT_TRUE(bit_identical(moved.meshes[0], expected));
-  EXPECT_FALSE(bit_identical(moved.meshes[0], seed1.meshes[0]));
+  EXPECT_TRUE(bit_identical(moved.meshes<2>()[0], expected));
+  EXPECT_FALSE(bit_identical(moved.meshes<2>()[0], seed1.meshes<2>()[0]));
 }
 
 }  // namespace

@@ -60,7 +60,7 @@ class StabilityTest : public ::testing::Test {
 // The exact linear stability limit of central differences: 2 / omega_max, with omega_max^2 the
 // largest eigenvalue of M^-1/2 K M^-1/2 on the free DOFs (K the tangent at the reference state).
 double true_critical_dt(const PreparedCase& pc) {
-  const Model<2>& m = pc.model;
+  const Model<2>& m = pc.model<2>();
   const int n = m.num_dofs();
   SystemMatrix sys = make_system_matrix(m);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
@@ -97,7 +97,7 @@ using test_support::text_of;
 TEST_F(StabilityTest, BracketsTheTrueLimitOfAnExplicitCase) {
   const PreparedCase pc = square();
   const double est = stability_estimate(pc);
-  EXPECT_EQ(est, pc.model.critical_dt);
+  EXPECT_EQ(est, pc.model<2>().critical_dt);
   EXPECT_NEAR(est, 0.01 / (std::sqrt(2.0) * std::sqrt(1e7 / (1000.0 * (1.0 - 0.25 * 0.25)))), 1e-9);
   const double exact = true_critical_dt(pc);
   EXPECT_GT(exact / est, 1.40);  // measured 1.41372
@@ -219,7 +219,7 @@ TEST_F(StabilityTest, ImplicitSchemeHasNoInstabilityUpToTheCap) {
   // time.end = 20 x estimate caps the search: estimate, 2, 4, 8, 16, 20 x, all stable.
   const PreparedCase pc = square({"scheme=implicit"});
   StabilityOptions opt;
-  opt.end_time = 20.0 * pc.model.critical_dt;
+  opt.end_time = 20.0 * pc.model<2>().critical_dt;
   const StabilityResult r = find_stable_dt(pc, opt);
   EXPECT_EQ(r.outcome, StabilityOutcome::no_unstable_up_to_cap);
   EXPECT_DOUBLE_EQ(r.cap, *opt.end_time);
@@ -248,12 +248,12 @@ TEST_F(StabilityTest, CapIsAThousandEstimatesWhenTheRunIsLonger) {
   opt.end_time = 0.2;  // 0.2 s > 1e3 x 6.85e-5 s
   opt.max_runs = 1;    // only the search range matters here
   const StabilityResult r = find_stable_dt(pc, opt);
-  EXPECT_DOUBLE_EQ(r.cap, 1e3 * pc.model.critical_dt);
-  EXPECT_DOUBLE_EQ(r.floor, 1e-3 * pc.model.critical_dt);
+  EXPECT_DOUBLE_EQ(r.cap, 1e3 * pc.model<2>().critical_dt);
+  EXPECT_DOUBLE_EQ(r.floor, 1e-3 * pc.model<2>().critical_dt);
   EXPECT_DOUBLE_EQ(r.end_time, 0.2);
   EXPECT_EQ(r.outcome, StabilityOutcome::run_limit);
   ASSERT_EQ(r.trials.size(), 1u);
-  EXPECT_EQ(r.trials[0].planned_steps, static_cast<long>(std::ceil(0.2 / pc.model.critical_dt)));
+  EXPECT_EQ(r.trials[0].planned_steps, static_cast<long>(std::ceil(0.2 / pc.model<2>().critical_dt)));
 }
 
 TEST_F(StabilityTest, CommandWritesTheReport) {
@@ -289,7 +289,7 @@ scale_factor = 1.0
 )";
   const PreparedCase pc = prepare_case(read_case(file, {"scheme=explicit_penalty"}));
   ASSERT_GT(pc.penalty_critical_dt, 0.0);
-  const double de = pc.model.critical_dt, dp = pc.penalty_critical_dt;
+  const double de = pc.model<2>().critical_dt, dp = pc.penalty_critical_dt;
   EXPECT_NEAR(stability_estimate(pc), 1.0 / std::sqrt(1.0 / (de * de) + 1.0 / (dp * dp)), 1e-15);
   EXPECT_LT(stability_estimate(pc), de);
 }

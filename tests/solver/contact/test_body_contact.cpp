@@ -55,7 +55,7 @@ const char* name(Scheme s) {
 RunResult run(const Model<2>& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
-    const PenaltyContact p = make_penalty_contact(model, s.obstacles, s.friction, s.prescribed, s.penalty, s.body_pairs);
+    const PenaltyContact p = make_penalty_contact(model, obstacles_of(s, model), s.friction, s.prescribed, s.penalty, s.body_pairs);
     s.dt = std::min(s.dt, penalty_stable_time_step(model, p, 0.9));
   }
   if (scheme == Scheme::implicit) return run_implicit(model, s, ImplicitSettings{});
@@ -342,7 +342,7 @@ TEST(BodyContact, CaseFileContactPairs) {
   EXPECT_EQ(pc.settings.penalty.soft_scale, 0.0);
   pc = prepare_case(read_case(head_on, {penalty, "penalty.soft=true"}));
   EXPECT_EQ(pc.settings.penalty.soft_scale, 0.1);
-  EXPECT_EQ(pc.settings.penalty.soft_dt, stable_time_step(pc.model, pc.spec.dt_safety));
+  EXPECT_EQ(pc.settings.penalty.soft_dt, stable_time_step(pc.model<2>(), pc.spec.dt_safety));
   EXPECT_LE(pc.settings.dt, pc.settings.penalty.soft_dt);
   pc = prepare_case(read_case(head_on, {penalty, "penalty.soft=true", "penalty.soft_scale=0.3", "time.dt=1e-8"}));
   EXPECT_EQ(pc.settings.penalty.soft_scale, 0.3);
@@ -400,7 +400,7 @@ TEST(BodyContact, ImplicitStepsDoNotAllocate) {
       SCOPED_TRACE(std::string(config.name) + " mu " + std::to_string(mu));
       HeadOn h(mu, {1.0, -0.3});
       h.settings.dt = 1e-7;
-      h.settings.obstacles = {make_line_obstacle("floor", Vec2::Zero(), Vec2::UnitY())};
+      h.settings.obstacles = std::vector<Obstacle>{make_line_obstacle("floor", Vec2::Zero(), Vec2::UnitY())};
       h.settings.friction = {{mu}, {mu}};
       ImplicitSettings im;
       im.linear_solver = config.solver;

@@ -46,7 +46,7 @@ RunResult run(const Model<3>& model, RunSettings s, Scheme scheme) {
   if (scheme == Scheme::penalty) {
     s.contact_method = RunSettings::ContactMethod::penalty;
     const PenaltyContactT<3> p =
-        make_penalty_contact(model, s.obstacles3, s.friction, s.prescribed, s.penalty, s.body_pairs);
+        make_penalty_contact(model, obstacles_of(s, model), s.friction, s.prescribed, s.penalty, s.body_pairs);
     s.dt = std::min(s.dt, penalty_stable_time_step(model, p, 0.9));
   }
   if (scheme == Scheme::implicit) return run_implicit(model, s, ImplicitSettings{});

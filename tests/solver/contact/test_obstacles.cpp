@@ -156,7 +156,7 @@ Drop drop(Scheme scheme, const Obstacle& ob, double y0, double mu, double end_ti
                                   Vec2(0.0, -100.0));
   for (int i = 0; i < model.num_nodes(); ++i) model.initial_velocity[2 * i + 1] = -0.2;
   RunSettings set;
-  set.obstacles = {ob};
+  set.obstacles = std::vector<Obstacle>{ob};
   set.friction = {{mu}};
   set.end_time = end_time;
   set.sample_interval = 0.0;
@@ -166,7 +166,7 @@ Drop drop(Scheme scheme, const Obstacle& ob, double y0, double mu, double end_ti
   d.initial_energy = 0.5 * d.mass * 0.04;
   if (scheme == Scheme::penalty) {
     set.contact_method = RunSettings::ContactMethod::penalty;
-    const PenaltyContact p = make_penalty_contact(model, set.obstacles, set.friction, {}, set.penalty);
+    const PenaltyContact p = make_penalty_contact(model, obstacles_of(set, model), set.friction, {}, set.penalty);
     set.dt = penalty_stable_time_step(model, p, 0.5);
   } else {
     set.dt = 0.5 * model.critical_dt;

@@ -137,7 +137,7 @@ TEST(FieldContact, BlockOnGroundForcesSumToTheHistory) {
     ASSERT_EQ(x.r.status, RunStatus::ok) << x.r.reason;
     ASSERT_EQ(x.r.fields.size(), 1u);
     const FieldSnapshot& f = x.r.fields[0];
-    const Model<2>& m = x.pc.model;
+    const Model<2>& m = x.pc.model<2>();
     const int n = m.num_nodes();
     ASSERT_EQ(f.contact_force.size(), 2u * n);
     ASSERT_EQ(f.contact_gap.size(), static_cast<std::size_t>(n));
@@ -207,7 +207,7 @@ TEST(FieldContact, BodyPairMasterCarriesItsShare) {
     ASSERT_EQ(x.r.status, RunStatus::ok) << x.r.reason;
     ASSERT_EQ(x.r.fields.size(), 1u);
     const FieldSnapshot& f = x.r.fields[0];
-    const Model<2>& m = x.pc.model;
+    const Model<2>& m = x.pc.model<2>();
     const int striker_end = m.bodies[1].first_node;  // the striker's nodes come first
     double striker = 0.0, target = 0.0, y = 0.0, target_abs = 0.0;  // x sums; y: the y sum
     int pressed = 0;
@@ -269,7 +269,7 @@ TEST(FieldContact, DivergedSnapshotCarriesTheArrays) {
     ASSERT_EQ(x.r.status, RunStatus::diverged);
     ASSERT_EQ(x.r.fields.size(), 1u) << x.r.reason;
     const FieldSnapshot& f = x.r.fields[0];
-    const Model<2>& m = x.pc.model;
+    const Model<2>& m = x.pc.model<2>();
     EXPECT_EQ(f.step, x.r.diverged_step);
     EXPECT_EQ(f.cauchy.size(), 6u * m.num_cells());
     EXPECT_EQ(f.green_lagrange.size(), 6u * m.num_cells());

@@ -111,7 +111,7 @@ PlateRun plate(const std::vector<std::string>& sets) {
   all.insert(all.end(), sets.begin(), sets.end());
   PlateRun run;
   run.prepared = prepare_case(read_case(kCase, all));
-  run.result = run_explicit(run.prepared.model, run.prepared.settings);
+  run.result = run_explicit(run.prepared.model<2>(), run.prepared.settings);
   return run;
 }
 
@@ -139,7 +139,7 @@ TEST(StressPeaks, VonMisesMaxIndependentOfOutputInterval) {
     // Where: a cell of the plate, inside its bounding box at that time, interior peak no larger.
     EXPECT_EQ(a.stress.peak.body, 0);
     EXPECT_GE(a.stress.peak.element, 0);
-    EXPECT_LT(a.stress.peak.element, fine.prepared.model.num_cells());
+    EXPECT_LT(a.stress.peak.element, fine.prepared.model<2>().num_cells());
     EXPECT_GT(a.stress.peak.y, -1e-3);
     EXPECT_LT(a.stress.peak.y, 0.09);
     EXPECT_LE(a.stress.interior_peak.value, a.stress.peak.value);
@@ -152,7 +152,7 @@ TEST(StressPeaks, VonMisesMaxIndependentOfOutputInterval) {
 TEST(StressPeaks, ForcePassMatchesStressPass) {
   const PlateRun run = plate({"time.end=6e-4", "output.fields=[6e-4]"});
   ASSERT_EQ(run.result.fields.size(), 1u);
-  const Model<2>& model = run.prepared.model;
+  const Model<2>& model = run.prepared.model<2>();
   const Eigen::VectorXd& u = run.result.fields[0].u;
   std::vector<std::uint8_t> contact_cell(model.num_cells(), 0);
   for (int c = 0; c < model.num_cells(); c += 3) contact_cell[c] = 1;

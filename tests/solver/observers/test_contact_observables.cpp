@@ -65,7 +65,7 @@ TEST(ContactObservables, FrictionlessPlateImpulseIsTheMomentumChange) {
                           {"obstacles[0].friction=0.0", "output.fields=[]", "time.dt=2e-6"}, &pc);
   ASSERT_EQ(r.status, RunStatus::ok);
   const double m = r.total_mass;
-  EXPECT_NEAR(m, 0.5 * pc.model.mass.sum(), 1e-15);
+  EXPECT_NEAR(m, 0.5 * pc.model<2>().mass.sum(), 1e-15);
   const double vy = last(r.history, "momentum_y") / m, vx = last(r.history, "momentum_x") / m;
   EXPECT_NEAR(r.contact.impulse_normal, m * (vy - (-5.0)), 1e-9 * m * 5.0);
   EXPECT_EQ(r.contact.impulse_tangential, 0.0);

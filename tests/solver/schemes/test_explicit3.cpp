@@ -57,7 +57,7 @@ RunSettings bar_settings(const Model<3>& model, RunSettings::ContactMethod metho
   s.dt = 0.9 * model.critical_dt;
   s.end_time = 1.2e-4;  // 2L/c = 8e-5 s of contact, then free flight
   s.sample_interval = 0.0;  // every step
-  s.obstacles3 = {make_plane_obstacle3("wall", Vec3::Zero(), Vec3::UnitX())};
+  s.obstacles = std::vector<Obstacle3>{make_plane_obstacle3("wall", Vec3::Zero(), Vec3::UnitX())};
   s.friction = {{0.0}};
   s.contact_method = method;
   s.threads = 1;
@@ -253,7 +253,7 @@ TEST(Explicit3, ObliqueImpactIsFrameInvariant) {
       const Model<3> model = build_model({b}, Vec3::Zero());
       RunSettings s;
       s.contact_method = method;
-      s.obstacles3 = {make_plane_obstacle3("ground", Vec3::Zero(), n)};
+      s.obstacles = std::vector<Obstacle3>{make_plane_obstacle3("ground", Vec3::Zero(), n)};
       s.friction = {{0.3}};
       s.threads = 1;
       s.dt = 0.5 * critical_time_step(model, s);

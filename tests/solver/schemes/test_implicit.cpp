@@ -583,7 +583,7 @@ TEST(Implicit, BodyAtRestInContactUnderGravityStarts) {
         s.dt = dt;
         s.end_time = 5e-3;
         s.field_times = {5e-3};
-        s.obstacles = {make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
+        s.obstacles = std::vector<Obstacle>{make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
         s.friction = {{mu}};
         ImplicitSettings im;
         im.linear_solver = solver;

@@ -193,7 +193,7 @@ TEST(NoAllocation, RelaxationStepsDoNotAllocate) {
   RunSettings settings;
   settings.dt = 0.9 * model.critical_dt;
   settings.end_time = 1.0;
-  settings.obstacles = {make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
+  settings.obstacles = std::vector<Obstacle>{make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
   settings.friction = {{0.5}};
   settings.prescribed = {{2 * mesh.node_sets.at("top").front(), PrescribedDof::Kind::velocity, 0.0, 0.0}};
   settings.loads = {{2 * mesh.node_sets.at("top").back() + 1, -1.0, 0.0, 0.0}};
@@ -202,9 +202,9 @@ TEST(NoAllocation, RelaxationStepsDoNotAllocate) {
   const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(model.num_dofs());
   for (const bool penalty : {false, true}) {
     SCOPED_TRACE(penalty ? "penalty" : "bi-potential");
-    BipotentialContact bipotential = make_bipotential_contact(model, settings.obstacles, settings.friction,
+    BipotentialContact bipotential = make_bipotential_contact(model, obstacles_of(settings, model), settings.friction,
                                                               settings.prescribed);
-    PenaltyContact springs = make_penalty_contact(model, settings.obstacles, settings.friction,
+    PenaltyContact springs = make_penalty_contact(model, obstacles_of(settings, model), settings.friction,
                                                   settings.prescribed, PenaltySettings{});
     Relaxation r(model, settings, 0.5 * settings.dt, u0,
                  {penalty ? nullptr : &bipotential, penalty ? &springs : nullptr});
@@ -336,7 +336,7 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
         SCOPED_TRACE(std::string(test3::kind_name(kind)) + ", " + config.name + ", mu " + std::to_string(mu));
         RunSettings s;
         s.dt = 2e-5;
-        s.obstacles3 = {make_plane_obstacle3("ground", Vec3(0.0, low, 0.0), Vec3::UnitY())};
+        s.obstacles = std::vector<Obstacle3>{make_plane_obstacle3("ground", Vec3(0.0, low, 0.0), Vec3::UnitY())};
         s.friction = {{mu}};
         ImplicitSettings im;
         im.linear_solver = config.solver;

@@ -62,7 +62,7 @@ const SchemeRun& scheme_run(const std::string& scheme, double mu, double dt = 0.
 
   SchemeRun run;
   run.prepared = prepare_case(read_case(kCase, overrides));
-  run.mass = 0.5 * run.prepared.model.mass.sum();
+  run.mass = 0.5 * run.prepared.model<2>().mass.sum();
   run.result = run_case(run.prepared);
   const RunResult& r = run.result;
   const History& h = r.history;
@@ -123,8 +123,8 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
       if (scheme == "explicit_penalty") {
         EXPECT_TRUE(pc.dt_auto());
         ASSERT_GT(pc.penalty_critical_dt, 0.0);
-        EXPECT_LE(r.dt, 0.9 * std::min(pc.model.critical_dt, pc.penalty_critical_dt));
-        const double combined = 1.0 / std::sqrt(1.0 / (pc.model.critical_dt * pc.model.critical_dt) +
+        EXPECT_LE(r.dt, 0.9 * std::min(pc.model<2>().critical_dt, pc.penalty_critical_dt));
+        const double combined = 1.0 / std::sqrt(1.0 / (pc.model<2>().critical_dt * pc.model<2>().critical_dt) +
                                                 1.0 / (pc.penalty_critical_dt * pc.penalty_critical_dt));
         EXPECT_NEAR(r.dt, 0.9 * combined, 1e-12 * combined);
         EXPECT_GT(r.penetration_max, 0.5 * delta);
@@ -132,7 +132,7 @@ TEST(Schemes, EveryContactSchemeRunsTheObliquePlate) {
         EXPECT_LT(r.energy_error_max, 1e-3);
         std::printf("[schemes] penalty mu %.1f: dt %.4e s = 0.9 x combined limit (elements %.4e, "
                     "springs %.4e), penetration %.3e m (estimate %.3e m)\n",
-                    mu, r.dt, pc.model.critical_dt, pc.penalty_critical_dt, r.penetration_max, delta);
+                    mu, r.dt, pc.model<2>().critical_dt, pc.penalty_critical_dt, r.penetration_max, delta);
       } else {
         EXPECT_FALSE(pc.dt_auto());
         EXPECT_EQ(r.dt, 1e-5);
@@ -234,7 +234,7 @@ TEST(Schemes, ImplicitIsStableAtTenTimesTheExplicitLimit) {
   for (double mu : {0.0, 0.1}) {
     SCOPED_TRACE("mu " + number(mu));
     const SchemeRun& semi = scheme_run("semi_explicit", mu, 1e-4);
-    EXPECT_GT(1e-4, semi.prepared.model.critical_dt);
+    EXPECT_GT(1e-4, semi.prepared.model<2>().critical_dt);
     EXPECT_EQ(semi.result.status, RunStatus::diverged);
     EXPECT_FALSE(semi.result.reason.empty());
     EXPECT_LT(semi.result.diverged_step, semi.result.planned_steps);
@@ -356,7 +356,7 @@ TEST(Schemes, HistoryColumnsMeanTheSameInEveryScheme) {
       EXPECT_NEAR(impulse_n, dpy, 1e-10 * std::abs(dpy));
       EXPECT_NEAR(impulse_t, dpx, 1e-10 * std::abs(dpy));
       if (scheme == "semi_explicit") {
-        EXPECT_LT(body, 0.92 / run.prepared.model.num_nodes());
+        EXPECT_LT(body, 0.92 / run.prepared.model<2>().num_nodes());
         EXPECT_EQ(h.at(0, fn), 0.0);  // the t = 0 row is the initial state
         EXPECT_EQ(h.at(0, work), 0.0);
         EXPECT_NEAR(h.at(0, total), e0, 1e-14 * e0);

@@ -143,7 +143,7 @@ TEST_F(Threads, EveryRunUsesItsThreadsAndResultsDoNotDependOnThem) {
     const PreparedCase base =
         prepare_case(read_case(file.string(), with({std::string("scheme=") + scheme}, variant.set)));
     if (!variant.set.empty()) {
-      EXPECT_GE(static_cast<std::size_t>(base.model.num_cells()), kForceParallelChunks * kForceChunkCells);
+      EXPECT_GE(static_cast<std::size_t>(base.model<2>().num_cells()), kForceParallelChunks * kForceChunkCells);
     }
     std::vector<RunResult> results;
     for (const int threads : {1, 2}) {
