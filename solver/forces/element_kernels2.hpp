@@ -24,40 +24,6 @@
 
 namespace ricochet {
 
-// Calls fn(block, material, std::bool_constant<viscous hourglass control>) for block k of
-// `kind`, with its material's own type (the constant is false for the blocks without
-// hourglass control).
-template <class Fn>
-void visit_block(const Model<2>& model, BlockKind kind, std::size_t k, Fn&& fn) {
-  switch (kind) {
-    case BlockKind::q4_hourglass: {
-      const Q4HourglassBlock& b = model.q4_hourglass[k];
-      std::visit(
-          [&](const auto& mat) {
-            if (b.form == HourglassForm::viscous)
-              fn(b, mat, std::true_type{});
-            else
-              fn(b, mat, std::false_type{});
-          },
-          b.material);
-      return;
-    }
-    case BlockKind::q4_full:
-      std::visit([&](const auto& mat) { fn(model.q4_full[k], mat, std::false_type{}); }, model.q4_full[k].material);
-      return;
-    case BlockKind::t3:
-      std::visit([&](const auto& mat) { fn(model.t3[k], mat, std::false_type{}); }, model.t3[k].material);
-      return;
-  }
-}
-
-// visit_block for every element block, in the order every pass sums f_int (kBlockKinds).
-template <class Fn>
-void for_each_block(const Model<2>& model, Fn&& fn) {
-  for (const BlockKind kind : kBlockKinds)
-    for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
-}
-
 // Where a kernel puts each cell's nodal forces fe (N x 2): added into the global array f
 // (DirectScatter), or stored at the cell's place in a buffer of 2N values per cell
 // (ElementStore: the threaded force pass, which sums them per node afterwards).

@@ -51,39 +51,6 @@
 
 namespace ricochet {
 
-// Calls fn(block, material, std::bool_constant<viscous hourglass control>) for block k of
-// `kind`, with its material's own type (one std::visit per block).
-template <class Fn>
-void visit_block(const Model<3>& model, BlockKind3 kind, std::size_t k, Fn&& fn) {
-  switch (kind) {
-    case BlockKind3::hex8_hourglass: {
-      const Hex8OnePointBlock& b = model.hex8_hourglass[k];
-      std::visit(
-          [&](const auto& mat) {
-            if (b.hourglass.form == HourglassForm::viscous)
-              fn(b, mat, std::true_type{});
-            else
-              fn(b, mat, std::false_type{});
-          },
-          b.material);
-      return;
-    }
-    case BlockKind3::hex8_full:
-      std::visit([&](const auto& mat) { fn(model.hex8_full[k], mat, std::false_type{}); }, model.hex8_full[k].material);
-      return;
-    case BlockKind3::tet4:
-      std::visit([&](const auto& mat) { fn(model.tet4[k], mat, std::false_type{}); }, model.tet4[k].material);
-      return;
-  }
-}
-
-// visit_block for every element block, in the order every pass sums f_int (kBlockKinds3).
-template <class Fn>
-void for_each_block(const Model<3>& model, Fn&& fn) {
-  for (const BlockKind3 kind : kBlockKinds3)
-    for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
-}
-
 // ---------------------------------------------------------------------------------------------
 // The cells' arithmetic, one lane at a time. Every function indexes its arrays with [], so it
 // takes a plain pointer (one cell's own arrays, stride 1) or a Strided accessor (a batch's

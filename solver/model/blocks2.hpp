@@ -106,6 +106,7 @@ using Q4FullBlock = ElementBlock<4, Q4FullGeom>;
 struct Q4HourglassBlock : ElementBlock<4, Q4HourglassGeom> {
   HourglassForm form = HourglassForm::viscous;
 };
+inline bool viscous_hourglass(const Q4HourglassBlock& b) { return b.form == HourglassForm::viscous; }
 using T3Block = ElementBlock<3, T3Geom>;
 
 template <>
@@ -134,8 +135,14 @@ struct ModelBlocks<2> {
 
   using Kind = BlockKind;
   static constexpr const BlockKind (&kKinds)[3] = kBlockKinds;
-  std::size_t num_blocks(BlockKind kind) const {
-    return kind == BlockKind::q4_hourglass ? q4_hourglass.size() : kind == BlockKind::q4_full ? q4_full.size() : t3.size();
+  // fn(the blocks of `kind`), a vector of that formulation's block type.
+  template <class Fn>
+  void with_blocks(BlockKind kind, Fn&& fn) const {
+    switch (kind) {
+      case BlockKind::q4_hourglass: return fn(q4_hourglass);
+      case BlockKind::q4_full: return fn(q4_full);
+      case BlockKind::t3: return fn(t3);
+    }
   }
   // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
   template <class Fn>

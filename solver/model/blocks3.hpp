@@ -113,6 +113,7 @@ using Hex8Block = ElementBlock3<8, Hex8Lanes>;
 struct Hex8OnePointBlock : ElementBlock3<8, Hex8OnePointLanes> {
   HourglassControl hourglass;  // the form decides the kernel: viscous (v) or stiffness (u)
 };
+inline bool viscous_hourglass(const Hex8OnePointBlock& b) { return b.hourglass.form == HourglassForm::viscous; }
 using Tet4Block = ElementBlock3<4, Tet4Lanes>;
 
 // The model's element blocks by formulation, in the order every force pass visits them (and so
@@ -129,10 +130,14 @@ struct ModelBlocks<3> {
 
   using Kind = BlockKind3;
   static constexpr const BlockKind3 (&kKinds)[3] = kBlockKinds3;
-  std::size_t num_blocks(BlockKind3 kind) const {
-    return kind == BlockKind3::hex8_hourglass ? hex8_hourglass.size()
-           : kind == BlockKind3::hex8_full    ? hex8_full.size()
-                                              : tet4.size();
+  // fn(the blocks of `kind`), a vector of that formulation's block type.
+  template <class Fn>
+  void with_blocks(BlockKind3 kind, Fn&& fn) const {
+    switch (kind) {
+      case BlockKind3::hex8_hourglass: return fn(hex8_hourglass);
+      case BlockKind3::hex8_full: return fn(hex8_full);
+      case BlockKind3::tet4: return fn(tet4);
+    }
   }
   // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
   template <class Fn>

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstddef>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "solver/model/blocks2.hpp"
@@ -30,7 +32,41 @@ struct Model : ModelBlocks<D> {
   int num_nodes() const { return static_cast<int>(ref.cols()); }
   int num_dofs() const { return D * num_nodes(); }
   int num_cells() const { return static_cast<int>(cell_dt.size()); }
+  std::size_t num_blocks(typename ModelBlocks<D>::Kind kind) const {
+    std::size_t n = 0;
+    this->with_blocks(kind, [&](const auto& blocks) { n = blocks.size(); });
+    return n;
+  }
 };
+
+// Calls fn(block, material, std::bool_constant<viscous hourglass control>) for block k of
+// `kind`, with its material's own type (one std::visit per block). The constant is false for
+// the formulations without hourglass control (no viscous_hourglass() for their block type).
+template <int D, class Fn>
+void visit_block(const Model<D>& model, typename ModelBlocks<D>::Kind kind, std::size_t k, Fn&& fn) {
+  model.with_blocks(kind, [&](const auto& blocks) {
+    const auto& b = blocks[k];
+    std::visit(
+        [&](const auto& mat) {
+          if constexpr (requires { viscous_hourglass(b); }) {
+            if (viscous_hourglass(b))
+              fn(b, mat, std::true_type{});
+            else
+              fn(b, mat, std::false_type{});
+          } else {
+            fn(b, mat, std::false_type{});
+          }
+        },
+        b.material);
+  });
+}
+
+// visit_block for every element block, in the order every pass sums f_int (ModelBlocks<D>::kKinds).
+template <int D, class Fn>
+void for_each_block(const Model<D>& model, Fn&& fn) {
+  for (const auto kind : ModelBlocks<D>::kKinds)
+    for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
+}
 
 // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
 template <int D, class Fn>
