@@ -1,23 +1,18 @@
 // The implicit scheme's contact problem in condensed form (docs/implicit.md, Contact): the
-// reactions R of the active contacts such that, with
-//   x = x_free + W R,   W = c dt H A^-1 H^T,
-// each contact's local x and r obey Coulomb's law through the bi-potential (Cros, Feng &
-// Magnain 2010, Eq. (5)). H maps nodal vectors to the contacts' local frames (each contact's
-// stencil, contact_set.hpp), A is the implicit scheme's iteration matrix and c its level factor
-// (dt theta at the position level, 1 at the velocity level). The scheme forms each active
-// contact's x_free and the diagonal estimate w of its local compliance (set_local); this class
-// solves for R, given a function that solves A y = b:
-//   - uzawa(): Uzawa sweeps in which x is evaluated exactly, one solve of A per sweep; fast when A
-//     is mass-dominated (W nearly diagonal);
-//   - exact(): W built column by column (one solve per active contact direction, a column kept
-//     while the factor, the contact's stencil and its direction are those it was computed with),
-//     then Gauss-Seidel over the contacts, each contact's local problem solved on its own block
-//     W_kk by solve_local_map (contact_space.hpp), the iteration that solve_local runs.
-// After either, impulse() = H^T R and response() = y = A^-1 (dt H^T R). Sized once
-// (reserve); nothing allocates in a solve.
+// reactions R of the active contacts such that x = x_free + W R, W = c dt H A^-1 H^T, and each
+// contact's local x and r obey Coulomb's law through the bi-potential (Cros, Feng & Magnain 2010,
+// Eq. (5)). H maps nodal vectors to the contacts' frames (their stencils, contact_set.hpp), A is
+// the scheme's iteration matrix, c its level factor (dt theta at the position level, 1 at the
+// velocity level). The scheme sets each active contact's x_free and diagonal compliance estimate
+// w (set_local); this class solves for R given a solve of A y = b: by Uzawa sweeps (uzawa(), one
+// solve per sweep, fast when A is mass-dominated), or with W built column by column and
+// Gauss-Seidel over the contacts, each local problem on its block W_kk by solve_local_map
+// (exact()). Then impulse() = H^T R and response() = A^-1 (dt H^T R). Sized once (reserve);
+// nothing allocates in a solve.
 #pragma once
 
 #include <algorithm>
+#include <ranges>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -89,13 +84,9 @@ class CondensedContact {
   // impulse = H^T R over every candidate (the last step's reactions, in the frames and on the
   // stencils they were solved in), or over the active ones.
   void impulse_of_all(const ContactSetT<D>& cs) {
-    impulse_.setZero();
-    for (std::size_t k = 0; k < cs.candidates.size(); ++k) add_reaction(cs, static_cast<int>(k));
+    impulse_of(cs, std::views::iota(0, static_cast<int>(cs.candidates.size())));
   }
-  void impulse_of_active(const ContactSetT<D>& cs) {
-    impulse_.setZero();
-    for (int k : cs.active) add_reaction(cs, k);
-  }
+  void impulse_of_active(const ContactSetT<D>& cs) { impulse_of(cs, cs.active); }
   // No active contact: R = 0.
   void clear() {
     impulse_.setZero();
@@ -116,7 +107,7 @@ class CondensedContact {
       double change = 0.0, size = 0.0;
       for (int k : cs.active) {
         const Local hy = stencil_dot(cs, k, y_);
-        const Local x = local_sum(x_free_[k], c, hy);
+        const Local x{x_free_[k].n + c * hy.n, decltype(Local::t)(x_free_[k].t + c * hy.t)};
         Local& r = cs.reaction[k];
         const Local next = bipotential_correct(r, x, cs.candidates[k].friction_coeff, omega / weight_[k]);
         change = std::max(change, local_distance(next, r));
@@ -182,10 +173,14 @@ class CondensedContact {
   long exact_solves() const { return exact_solves_; }
 
  private:
-  void add_reaction(const ContactSetT<D>& cs, int k) {
-    const Vec r = ContactFrame<D>(cs.normal[k]).global(cs.reaction[k]);
-    const Stencil& st = cs.stencil[k];
-    for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
+  template <class Ks>
+  void impulse_of(const ContactSetT<D>& cs, const Ks& ks) {
+    impulse_.setZero();
+    for (const int k : ks) {
+      const Vec r = ContactFrame<D>(cs.normal[k]).global(cs.reaction[k]);
+      const Stencil& st = cs.stencil[k];
+      for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
+    }
   }
 
   // (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
@@ -194,9 +189,6 @@ class CondensedContact {
     Vec sum = Vec::Zero();
     for (int j = 0; j < st.count; ++j) sum += st.coef[j] * y.template segment<D>(D * st.node[j]);
     return ContactFrame<D>(cs.normal[k]).local(sum);
-  }
-  static Local local_sum(const Local& a, double c, const Local& b) {
-    return Local{a.n + c * b.n, decltype(Local::t)(a.t + c * b.t)};
   }
 
   // Active direction a: direction a % dirs of contact a / dirs's frame.

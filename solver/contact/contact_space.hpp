@@ -63,9 +63,9 @@ struct ContactFrame<3> {
     t1 = f.t1;
     t2 = f.t2;
   }
-  // r_n n + r_t1 t1 + r_t2 t2 [N] (to_global_3d)
+  // r_n n + r_t1 t1 + r_t2 t2 [N]
   Vec3 global(const LocalPair3d& r) const { return r.n * n + r.t.x() * t1 + r.t.y() * t2; }
-  // (n . v, (t1 . v, t2 . v)) (to_local_3d)
+  // (n . v, (t1 . v, t2 . v))
   LocalPair3d local(const Vec3& v) const { return {n.dot(v), Vec2(t1.dot(v), t2.dot(v))}; }
   // (t1 . v, t2 . v)
   Vec2 tangential(const Vec3& v) const { return Vec2(t1.dot(v), t2.dot(v)); }

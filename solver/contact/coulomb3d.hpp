@@ -1,7 +1,10 @@
 // The local frictional contact problem of one contact in 3D, in its local frame (n; t1, t2): the
-// 3D counterpart of coulomb.hpp, with the same conventions and the same rules, names suffixed
-// `_3d` so that nothing of 2D changes. Reaction r = (r_n, r_t), relative quantity x = (x_n, x_t)
-// (a gap and slip increment at the position level, a relative velocity at the velocity level),
+// 3D counterpart of coulomb.hpp, with the same conventions, rules and function names, overloaded
+// on LocalPair3d, so that code templated over the dimension calls project_coulomb(r, mu),
+// bipotential_update(r, x, w, mu, rho), ... for either pair. A braced pair such as {1.0, 0.3}
+// cannot initialize a LocalPair3d (its tangential part, an Eigen vector, has no implicit
+// conversion from a number), so it still means a 2D LocalPair; only an empty {} fits both.
+// Reaction r = (r_n, r_t), relative quantity x = (x_n, x_t) (a gap and slip increment at the position level, a relative velocity at the velocity level),
 // each with a tangential part in the contact's tangent plane, given by its components on
 // (t1, t2); x = x_free + w r with an isotropic local compliance w. Sign convention
 // (docs/background.md, The contact law and the bi-potential): x_n > 0 separates, r_n >= 0 pushes
@@ -47,7 +50,7 @@ inline LocalPair3d de_saxce_modified_3d(const LocalPair3d& x, double mu) {
 // r*_n < 0, and then the second holds), and there r*_t / |r*_t| has components in [-1, 1].
 // The unit direction is formed before it is scaled, so that along one tangent it is exactly
 // +-1 and the result is the 2D one bit for bit.
-inline LocalPair3d project_coulomb_3d(const LocalPair3d& r, double mu) {
+inline LocalPair3d project_coulomb(const LocalPair3d& r, double mu) {
   const double at = tangential_norm_3d(r.t);
   if (r.n >= 0.0 && at <= mu * r.n) return r;  // r.n >= 0: with mu = 0, 0 <= 0 * r.n holds for r.n < 0
   if (mu * at <= -r.n) return {};
@@ -60,22 +63,22 @@ inline LocalPair3d project_coulomb_3d(const LocalPair3d& r, double mu) {
 // stick strictly inside the cone (a relative margin of 1e-12, so that a projected slip reaction,
 // whose |r_t| = mu r_n is rounded, stays slip); slip on its surface. Frictionless contact with
 // a reaction is slip (no stick force is available).
-inline ContactStatus classify_3d(const LocalPair3d& r, double mu) {
+inline ContactStatus classify(const LocalPair3d& r, double mu) {
   if (!(r.n > 0.0)) return ContactStatus::open;
   return tangential_norm_3d(r.t) < mu * r.n * (1.0 - 1e-12) ? ContactStatus::stick : ContactStatus::slip;
 }
 
 // The bi-potential predictor-corrector of paper Eq. (5) at a given x:
 //   r* = r - rho (x + mu |x_t| n),  r <- Proj_K(r*).
-inline LocalPair3d bipotential_correct_3d(const LocalPair3d& r, const LocalPair3d& x, double mu, double rho) {
+inline LocalPair3d bipotential_correct(const LocalPair3d& r, const LocalPair3d& x, double mu, double rho) {
   const LocalPair3d m = de_saxce_modified_3d(x, mu);
-  return project_coulomb_3d({r.n - rho * m.n, Vec2(r.t - rho * m.t)}, mu);
+  return project_coulomb({r.n - rho * m.n, Vec2(r.t - rho * m.t)}, mu);
 }
 
 // One bi-potential update of a local problem with isotropic compliance, x = x_free + w r.
-inline LocalPair3d bipotential_update_3d(const LocalPair3d& r, const LocalPair3d& x_free, double w, double mu,
+inline LocalPair3d bipotential_update(const LocalPair3d& r, const LocalPair3d& x_free, double w, double mu,
                                          double rho) {
-  return bipotential_correct_3d(r, {x_free.n + w * r.n, Vec2(x_free.t + w * r.t)}, mu, rho);
+  return bipotential_correct(r, {x_free.n + w * r.n, Vec2(x_free.t + w * r.t)}, mu, rho);
 }
 
 // The fixed point of the iteration in closed form, as closed_form_reaction (coulomb.hpp):
@@ -83,33 +86,13 @@ inline LocalPair3d bipotential_update_3d(const LocalPair3d& r, const LocalPair3d
 // r_t = mu r_n along -x_free_t / |x_free_t| (with an isotropic compliance the slip keeps the
 // direction of the free slip). The slip branch has |x_free_t| > 0 (the stick test holds for
 // x_free_t = 0), so no 0/0.
-inline LocalPair3d closed_form_reaction_3d(const LocalPair3d& x_free, double w, double mu) {
+inline LocalPair3d closed_form_reaction(const LocalPair3d& x_free, double w, double mu) {
   const double rn = std::max(0.0, -x_free.n / w);
   const Vec2 rt_stick = -x_free.t / w;
   const double at = tangential_norm_3d(rt_stick);
   if (at <= mu * rn) return {rn, rt_stick};
   const Vec2 direction = rt_stick / at;
   return {rn, (mu * rn) * direction};
-}
-
-// The same functions without the `_3d` suffix, overloaded on LocalPair3d, so that code templated
-// over the dimension calls project_coulomb(r, mu), bipotential_update(r, x, w, mu, rho), ... for a
-// 2D LocalPair (coulomb.hpp) and a 3D LocalPair3d alike. Each forwards to its `_3d` function, so
-// the results are those bit for bit (tests/solver/contact/test_obstacles3.cpp). No call of the 2D functions
-// changes: a braced pair such as {1.0, 0.3} cannot initialize a LocalPair3d (its tangential part,
-// an Eigen vector, has no implicit conversion from a number), so it still picks the 2D overload.
-// Only an empty {} would fit both: write LocalPair{} or LocalPair3d{} there.
-inline LocalPair3d project_coulomb(const LocalPair3d& r, double mu) { return project_coulomb_3d(r, mu); }
-inline ContactStatus classify(const LocalPair3d& r, double mu) { return classify_3d(r, mu); }
-inline LocalPair3d bipotential_correct(const LocalPair3d& r, const LocalPair3d& x, double mu, double rho) {
-  return bipotential_correct_3d(r, x, mu, rho);
-}
-inline LocalPair3d bipotential_update(const LocalPair3d& r, const LocalPair3d& x_free, double w, double mu,
-                                      double rho) {
-  return bipotential_update_3d(r, x_free, w, mu, rho);
-}
-inline LocalPair3d closed_form_reaction(const LocalPair3d& x_free, double w, double mu) {
-  return closed_form_reaction_3d(x_free, w, mu);
 }
 
 // The length |(n, t)| of a local pair in either dimension, as solve_local's stopping test
@@ -136,15 +119,6 @@ inline Frame3d contact_frame_3d(const Vec3& n) {
   const double b = n.x() * n.y() * a;
   return {Vec3(1.0 + sign * n.x() * n.x() * a, sign * b, -sign * n.x()),
           Vec3(b, sign + n.y() * n.y() * a, -n.y()), n};
-}
-
-// Components of a global vector in the frame, and back.
-inline LocalPair3d to_local_3d(const Frame3d& f, const Vec3& v) {
-  return {f.n.dot(v), Vec2(f.t1.dot(v), f.t2.dot(v))};
-}
-
-inline Vec3 to_global_3d(const Frame3d& f, const LocalPair3d& l) {
-  return l.n * f.n + l.t.x() * f.t1 + l.t.y() * f.t2;
 }
 
 }  // namespace ricochet

@@ -1,6 +1,6 @@
-// The fixed sparsity pattern of a SystemMatrix (tangent.hpp), in either dimension: one build
-// for make_system_matrix(const Model<2>&) (tangent.cpp, D = 2) and make_system_matrix(const Model<3>&)
-// (tangent3.cpp, D = 3). Index arithmetic only: no floating-point value depends on it.
+// The fixed sparsity pattern of a SystemMatrix (tangent.hpp), in either dimension:
+// make_system_matrix(const Model<D>&), instantiated in tangent.cpp (D = 2) and tangent3.cpp
+// (D = 3). Index arithmetic only: no floating-point value depends on it.
 #pragma once
 
 #include <algorithm>
@@ -38,12 +38,19 @@ void block_slots(const Block& b, const SystemMatrix& s, std::vector<int>& slots)
     }
 }
 
-// The SystemMatrix of n nodes with D DOFs each (values zero, diagonal zero): the pattern of
-// SystemMatrix (row D a + i holds the columns D b + k of every node b that shares a cell with
-// node a, and node a's own), its slots and its diagonal slots. for_each_block(fn) calls
-// fn(block) for every element block, in the order in which the assembly reads the slots.
-template <int D, class ForEachBlock>
-SystemMatrix make_system_matrix(int n, ForEachBlock&& for_each_block) {
+}  // namespace ricochet::system_pattern
+namespace ricochet {
+
+// The SystemMatrix of a model (values zero, diagonal zero): the pattern of SystemMatrix (row
+// D a + i holds the columns D b + k of every node b that shares a cell with node a, and node a's
+// own), its slots in the order every pass visits the blocks (ModelBlocks<D>::kKinds), and its
+// diagonal slots.
+template <int D>
+SystemMatrix make_system_matrix(const Model<D>& model) {
+  using system_pattern::block_slots;
+  using system_pattern::kCellNodes;
+  const int n = model.num_nodes();
+  auto for_each_block = [&model](auto&& fn) { for_each_cell_block(model, fn); };
   // Node adjacency (each node with itself and every node it shares a cell with).
   std::vector<std::vector<int>> adj(n);
   for (int a = 0; a < n; ++a) adj[a].push_back(a);
@@ -89,4 +96,4 @@ SystemMatrix make_system_matrix(int n, ForEachBlock&& for_each_block) {
   return s;
 }
 
-}  // namespace ricochet::system_pattern
+}  // namespace ricochet

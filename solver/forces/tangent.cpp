@@ -98,35 +98,21 @@ struct SystemPass {
   void finish(ForceTotals&) const {}
 };
 
-// Blocks in the order of for_each_block, as internal_forces sums f_int; the slots are stored in
-// Model<2> order (q4_full, q4_hourglass, t3).
+// Blocks in the order of for_each_block, as internal_forces sums f_int, and of the slots.
 template <bool kEnergy>
 void all_blocks(const Model<2>& model, const double* u, const double* v, double k_scale, double c_scale,
                 double* val, double* f, const int* slots, ForceTotals& t) {
-  std::size_t off_full = 0, off_hg = 0, off_t3 = 0;
-  for (const auto& b : model.q4_full) off_hg += 64 * b.conn.size();
-  off_t3 = off_hg;
-  for (const auto& b : model.q4_hourglass) off_t3 += 64 * b.conn.size();
-
   for_each_block(model, [&](const auto& b, const auto& mat, auto viscous) {
-    using Block = std::decay_t<decltype(b)>;
     constexpr int N = std::tuple_size_v<typename std::decay_t<decltype(b.conn)>::value_type>;
-    std::size_t& off = std::is_same_v<Block, T3Block>       ? off_t3
-                       : std::is_same_v<Block, Q4FullBlock> ? off_full
-                                                            : off_hg;
     element_kernel<decltype(viscous)::value>(b, mat, u, v, DirectScatter{f},
-                                             SystemPass<kEnergy, N>{k_scale, c_scale, val, slots + off, {}}, t);
-    off += 4 * N * N * b.conn.size();
+                                             SystemPass<kEnergy, N>{k_scale, c_scale, val, slots, {}}, t);
+    slots += 4 * N * N * b.conn.size();
   });
 }
 
 }  // namespace
 
-// Slots in Model<2> order (q4_full, q4_hourglass, t3), the order of for_each_cell_block.
-SystemMatrix make_system_matrix(const Model<2>& model) {
-  return system_pattern::make_system_matrix<2>(
-      model.num_nodes(), [&model](auto&& fn) { for_each_cell_block(model, fn); });
-}
+template SystemMatrix make_system_matrix<2>(const Model<2>& model);
 
 ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,

@@ -22,15 +22,17 @@ namespace ricochet {
 // columns (so the diagonal exists even for a node in no cell).
 struct SystemMatrix {
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix;
-  // for each element of each block, in block order (q4_full, q4_hourglass, t3 as in Model<2>; in 3D
-  // hex8_hourglass, hex8_full, tet4 as in Model<3>), the positions in matrix.valuePtr() of its
-  // (DN x DN) entries, row-major over element dofs
+  // for each element of each block, in the order every pass visits the blocks (ModelBlocks<D>::kKinds:
+  // q4_hourglass, q4_full, t3; in 3D hex8_hourglass, hex8_full, tet4), the positions in
+  // matrix.valuePtr() of its (DN x DN) entries, row-major over element dofs
   std::vector<int> slots;
   Eigen::VectorXd diagonal;  // copy of the diagonal after assembly (for Jacobi preconditioning)
   std::vector<int> diagonal_slots;  // position of entry (d, d) in matrix.valuePtr(), per DOF
 };
 
-SystemMatrix make_system_matrix(const Model<2>& model);
+// The matrix's pattern for a model (system_pattern.hpp), for D = 2 and 3.
+template <int D>
+SystemMatrix make_system_matrix(const Model<D>& model);
 
 // Assembles A = m_scale * M + k_scale * K_T(u) + c_scale * C into s.matrix (values overwritten),
 // where M is the lumped mass (diagonal), K_T = d f_int / d u at velocity v (material + geometric
@@ -43,12 +45,11 @@ ForceTotals assemble_system(const Model<2>& model, const double* u, const double
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);
 
-// The same for a Model<3> (tangent3.cpp): D = 3 DOFs per node, the pattern of the 3D cells, and
+// The same for a Model<3> (tangent3.cpp): D = 3 DOFs per node and
 // the element matrices of element3d.hpp (hex8_stiffness, hex8_one_point_stiffness,
 // tet4_stiffness) on the geometry rebuilt by cell_geometry() (model3.hpp). f_int and the totals
 // come from the 3D force pass, internal_forces(const Model<3>&, ...), so the Newton residual and
 // the assembly see the same forces bit for bit.
-SystemMatrix make_system_matrix(const Model<3>& model);
 ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);

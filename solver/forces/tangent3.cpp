@@ -12,15 +12,6 @@
 namespace ricochet {
 namespace {
 
-// fn(block) for every element block in the order of SystemMatrix::slots: one-point hexahedra,
-// 2x2x2 hexahedra, tetrahedra (kBlockKinds3, the order the force pass sums f_int in).
-template <class Fn>
-void for_each_slot_block(const Model<3>& model, Fn&& fn) {
-  for (const auto& b : model.hex8_hourglass) fn(b);
-  for (const auto& b : model.hex8_full) fn(b);
-  for (const auto& b : model.tet4) fn(b);
-}
-
 // The displacement (or velocity) of cell e's corners, 3 x N.
 template <int N, class Conn>
 Nodes3<N> gather(const double* x, const Conn& c) {
@@ -66,10 +57,7 @@ void element_matrix(const Model<3>& model, const Tet4Block& b, std::size_t e, co
 
 }  // namespace
 
-SystemMatrix make_system_matrix(const Model<3>& model) {
-  return system_pattern::make_system_matrix<3>(model.num_nodes(),
-                                               [&model](auto&& fn) { for_each_slot_block(model, fn); });
-}
+template SystemMatrix make_system_matrix<3>(const Model<3>& model);
 
 ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
@@ -80,7 +68,7 @@ ForceTotals assemble_system(const Model<3>& model, const double* u, const double
   for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
 
   const int* slot = s.slots.data();
-  for_each_slot_block(model, [&](const auto& b) {
+  for_each_cell_block(model, [&](const auto& b) {
     constexpr int N = std::decay_t<decltype(b)>::kNodes;
     std::visit(
         [&](const auto& law) {

@@ -88,20 +88,6 @@ struct ElementBlock {
   const double* batch_geom(std::size_t k) const { return lane_geom.data() + k * Geom::kLaneValues * kLanes; }
 };
 
-// Fills b.lane_conn and b.lane_geom from b.conn and b.geom.
-template <int N, class Geom>
-void pack_lanes(ElementBlock<N, Geom>& b) {
-  const std::size_t batches = b.num_batches();
-  b.lane_conn.assign(batches * N * kLanes, 0);
-  b.lane_geom.assign(batches * Geom::kLaneValues * kLanes, 0.0);
-  for (std::size_t k = 0; k < batches; ++k)
-    for (int l = 0; l < kLanes; ++l) {
-      const std::size_t e = std::min(k * kLanes + l, b.conn.size() - 1);
-      for (int i = 0; i < N; ++i) b.lane_conn[(k * N + i) * kLanes + l] = b.conn[e][i];
-      for (int j = 0; j < Geom::kLaneValues; ++j)
-        b.lane_geom[(k * Geom::kLaneValues + j) * kLanes + l] = b.geom[e].lane_value(j);
-    }
-}
 using Q4FullBlock = ElementBlock<4, Q4FullGeom>;
 struct Q4HourglassBlock : ElementBlock<4, Q4HourglassGeom> {
   HourglassForm form = HourglassForm::viscous;
@@ -143,13 +129,6 @@ struct ModelBlocks<2> {
       case BlockKind::q4_full: return fn(q4_full);
       case BlockKind::t3: return fn(t3);
     }
-  }
-  // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
-  template <class Fn>
-  void for_each_cell_block(Fn&& fn) const {
-    for (const auto& b : q4_full) fn(b);
-    for (const auto& b : q4_hourglass) fn(b);
-    for (const auto& b : t3) fn(b);
   }
 };
 

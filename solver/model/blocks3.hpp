@@ -139,13 +139,6 @@ struct ModelBlocks<3> {
       case BlockKind3::tet4: return fn(tet4);
     }
   }
-  // fn(block) for every element block (conn, first_cell, body), whatever its formulation.
-  template <class Fn>
-  void for_each_cell_block(Fn&& fn) const {
-    for (const auto& b : hex8_full) fn(b);
-    for (const auto& b : hex8_hourglass) fn(b);
-    for (const auto& b : tet4) fn(b);
-  }
 };
 
 // The monomials of the trilinear hexahedron's Walsh-Hadamard coefficients (element_kernels3.hpp):

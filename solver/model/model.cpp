@@ -116,20 +116,35 @@ Eigen::Vector4d q4_shape(double xi, double eta) {
 }
 
 
-// Fills b.lane_conn and b.lane_geom (the layout of ElementBlock3) from b.conn and the cells'
-// values (values[e * kValues + j]).
-template <int N, class Layout>
-void pack_lane_values(ElementBlock3<N, Layout>& b, const std::vector<double>& values) {
+// Appends block b, unless it has no cell, to `blocks` with its lane layout (blocks2.hpp,
+// blocks3.hpp): b.lane_conn and b.lane_geom from b.conn and value(e, j), the j-th of the n lane
+// values of cell e (a batch's missing lanes repeat its last cell).
+template <class Block, class Value>
+void add_block(std::vector<Block>& blocks, Block& b, int n, const Value& value) {
+  if (b.conn.empty()) return;
+  constexpr int N = std::tuple_size_v<typename decltype(b.conn)::value_type>;
   const std::size_t batches = b.num_batches();
   b.lane_conn.assign(batches * N * kLanes, 0);
-  b.lane_geom.assign(batches * Layout::kValues * kLanes, 0.0);
+  b.lane_geom.assign(batches * n * kLanes, 0.0);
   for (std::size_t k = 0; k < batches; ++k)
     for (int l = 0; l < kLanes; ++l) {
       const std::size_t e = std::min(k * kLanes + l, b.conn.size() - 1);
       for (int i = 0; i < N; ++i) b.lane_conn[(k * N + i) * kLanes + l] = b.conn[e][i];
-      for (int j = 0; j < Layout::kValues; ++j)
-        b.lane_geom[(k * Layout::kValues + j) * kLanes + l] = values[e * Layout::kValues + j];
+      for (int j = 0; j < n; ++j) b.lane_geom[(k * n + j) * kLanes + l] = value(e, j);
     }
+  blocks.push_back(std::move(b));
+}
+// The 2D blocks' lane values: Geom::lane_value of each cell's geometry.
+template <class Block>
+void add_block(std::vector<Block>& blocks, Block& b) {
+  using Geom = typename decltype(b.geom)::value_type;
+  add_block(blocks, b, Geom::kLaneValues, [&b](std::size_t e, int j) { return b.geom[e].lane_value(j); });
+}
+// The 3D blocks' lane values: kValues per cell in `values`, cell after cell.
+template <class Block>
+void add_block(std::vector<Block>& blocks, Block& b, const std::vector<double>& values) {
+  constexpr int n = Block::Lanes::kValues;
+  add_block(blocks, b, n, [&values](std::size_t e, int j) { return values[e * n + j]; });
 }
 
 // The Walsh-Hadamard coefficients sum_a s_am x_a of 8 corner values for the monomials m = 0..7
@@ -243,14 +258,8 @@ Model<2> build_model(const std::vector<BodyInput<2>>& inputs, PlaneMode plane, c
     }
     model.cell_dt[cell0 + q] = q4_characteristic_length(x) / cp;
   }
-  if (!full.conn.empty()) {
-    pack_lanes(full);
-    model.q4_full.push_back(std::move(full));
-  }
-  if (!hg.conn.empty()) {
-    pack_lanes(hg);
-    model.q4_hourglass.push_back(std::move(hg));
-  }
+  add_block(model.q4_full, full);
+  add_block(model.q4_hourglass, hg);
 
   T3Block tri;
   tri.body = bi;
@@ -273,10 +282,7 @@ Model<2> build_model(const std::vector<BodyInput<2>>& inputs, PlaneMode plane, c
     tri.geom.push_back(tg);
     model.cell_dt[tri.first_cell + k] = t3_characteristic_length(x) / cp;
   }
-  if (!tri.conn.empty()) {
-    pack_lanes(tri);
-    model.t3.push_back(std::move(tri));
-  }
+  add_block(model.t3, tri);
 
   });
   return model;
@@ -333,14 +339,8 @@ Model<3> build_model(const std::vector<BodyInput<3>>& inputs, const Vec3& gravit
     add_cell_masses(model, node0, c, hex8_lumped_masses(x, rho));
     model.cell_dt[cell0 + e] = hex8_characteristic_length(x) / cp;
   }
-  if (!full.conn.empty()) {
-    pack_lane_values(full, values);
-    model.hex8_full.push_back(std::move(full));
-  }
-  if (!hg.conn.empty()) {
-    pack_lane_values(hg, values);
-    model.hex8_hourglass.push_back(std::move(hg));
-  }
+  add_block(model.hex8_full, full, values);
+  add_block(model.hex8_hourglass, hg, values);
 
   // Tetrahedra.
   Tet4Block tet;
@@ -360,10 +360,7 @@ Model<3> build_model(const std::vector<BodyInput<3>>& inputs, const Vec3& gravit
     add_cell_masses(model, node0, c, tet4_lumped_masses(x, rho));
     model.cell_dt[tet.first_cell + k] = tet4_characteristic_length(x) / cp;
   }
-  if (!tet.conn.empty()) {
-    pack_lane_values(tet, values);
-    model.tet4.push_back(std::move(tet));
-  }
+  add_block(model.tet4, tet, values);
 
   });
   return model;

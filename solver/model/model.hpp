@@ -61,17 +61,21 @@ void visit_block(const Model<D>& model, typename ModelBlocks<D>::Kind kind, std:
   });
 }
 
+// fn(block) for every element block (conn, first_cell, body), whatever its formulation, in the
+// order of ModelBlocks<D>::kKinds.
+template <int D, class Fn>
+void for_each_cell_block(const Model<D>& model, Fn&& fn) {
+  for (const auto kind : ModelBlocks<D>::kKinds)
+    model.with_blocks(kind, [&](const auto& blocks) {
+      for (const auto& b : blocks) fn(b);
+    });
+}
+
 // visit_block for every element block, in the order every pass sums f_int (ModelBlocks<D>::kKinds).
 template <int D, class Fn>
 void for_each_block(const Model<D>& model, Fn&& fn) {
   for (const auto kind : ModelBlocks<D>::kKinds)
     for (std::size_t k = 0; k < model.num_blocks(kind); ++k) visit_block(model, kind, k, fn);
-}
-
-// fn(block) for every element block (conn, first_cell, body), whatever its formulation.
-template <int D, class Fn>
-void for_each_cell_block(const Model<D>& model, Fn&& fn) {
-  model.for_each_cell_block(fn);
 }
 
 // Builds a 2D model: per body its nodes (after the previous bodies'), a block of its

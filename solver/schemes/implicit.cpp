@@ -37,8 +37,6 @@ double internal_force_roundoff(const M& model) {
   return f;
 }
 
-}  // namespace
-namespace {
 
 // The diagonal of A at a node, for the local compliance estimate: the mean over its DOFs.
 inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::integral_constant<int, 2>) {

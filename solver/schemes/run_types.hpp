@@ -109,12 +109,11 @@ struct RunSettings {
 // obstacles).
 template <class M>
 const std::vector<ObstacleOf<M>>& obstacles_of(const RunSettings& s, const M&) {
+  static const std::vector<ObstacleOf<M>> none;
   if (const auto* list = std::get_if<std::vector<ObstacleOf<M>>>(&s.obstacles)) return *list;
-  if (!obstacle_count(s.obstacles)) {
-    static const std::vector<ObstacleOf<M>> none;
-    return none;
-  }
-  throw std::invalid_argument("run settings: obstacles of another dimension than the model's");
+  if (obstacle_count(s.obstacles))
+    throw std::invalid_argument("run settings: obstacles of another dimension than the model's");
+  return none;
 }
 // The same list to fill: an empty list of the other dimension becomes one of M's.
 template <class M>

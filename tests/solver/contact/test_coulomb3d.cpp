@@ -124,7 +124,7 @@ std::vector<LocalPair3d> projection_samples(double mu, std::mt19937_64& gen) {
 const double kMus[] = {0.0, 0.1, 0.3, 0.5, 1.0, 2.0};
 
 // ---------------------------------------------------------------------------------------------
-// project_coulomb_3d
+// project_coulomb
 
 TEST(Coulomb3d, ProjectionSatisfiesMoreauDecomposition) {
   // Moreau: y = p + q with p in K, q in the polar cone K° = {mu |q_t| <= -q_n} and p . q = 0
@@ -137,7 +137,7 @@ TEST(Coulomb3d, ProjectionSatisfiesMoreauDecomposition) {
     for (const LocalPair3d& y : projection_samples(mu, gen)) {
       const double scale = (1.0 + mu) * norm3(y);
       const double tol = 16 * kEps * scale;
-      const LocalPair3d p = project_coulomb_3d(y, mu);
+      const LocalPair3d p = project_coulomb(y, mu);
       const LocalPair3d q{y.n - p.n, Vec2(y.t - p.t)};
       const double residuals[] = {
           -p.n,                                           // p_n >= 0
@@ -164,7 +164,7 @@ TEST(Coulomb3d, ProjectionMatchesNearestPointOverTheConesRays) {
   long compared = 0;
   for (double mu : kMus) {
     for (const LocalPair3d& y : projection_samples(mu, gen)) {
-      const LocalPair3d p = project_coulomb_3d(y, mu);
+      const LocalPair3d p = project_coulomb(y, mu);
       const LocalPair3d ref = projection_by_rays(y, mu);
       const double err = dist3(p, ref);
       ASSERT_LE(err, 1e-12 * norm3(y)) << "mu " << mu << " y = (" << y.n << ", " << y.t.transpose()
@@ -190,7 +190,7 @@ TEST(Coulomb3d, ProjectionCasesInsidePolarIdempotent) {
     for (int k = 0; k < 4000; ++k) {
       const LocalPair3d y{uni(gen), Vec2(uni(gen), uni(gen))};
       const double yt = std::sqrt(y.t.squaredNorm());
-      const LocalPair3d p = project_coulomb_3d(y, mu);
+      const LocalPair3d p = project_coulomb(y, mu);
       if (y.n >= 0.0 && yt <= mu * y.n) {
         ++inside;
         ASSERT_EQ(p.n, y.n);
@@ -202,7 +202,7 @@ TEST(Coulomb3d, ProjectionCasesInsidePolarIdempotent) {
         ASSERT_EQ(p.t.x(), 0.0);
         ASSERT_EQ(p.t.y(), 0.0);
       }
-      const LocalPair3d pp = project_coulomb_3d(p, mu);
+      const LocalPair3d pp = project_coulomb(p, mu);
       ASSERT_LE(dist3(pp, p), 8 * kEps * (1.0 + mu) * norm3(y));
     }
   }
@@ -216,7 +216,7 @@ TEST(Coulomb3d, ProjectionWithZeroTangentialPartHasNoNaN) {
   for (double mu : {0.0, 0.3, 2.0}) {
     for (double rn : {-2.0, -1e-300, -0.0, 0.0, 1e-300, 2.0}) {
       for (const Vec2& t : {Vec2(0.0, 0.0), Vec2(-0.0, 0.0), Vec2(0.0, -0.0), Vec2(-0.0, -0.0)}) {
-        const LocalPair3d p = project_coulomb_3d({rn, t}, mu);
+        const LocalPair3d p = project_coulomb({rn, t}, mu);
         EXPECT_TRUE(std::isfinite(p.n) && std::isfinite(p.t.x()) && std::isfinite(p.t.y()))
             << "mu " << mu << " rn " << rn;
         EXPECT_EQ(p.n, std::max(0.0, rn)) << "mu " << mu << " rn " << rn;
@@ -234,7 +234,7 @@ TEST(Coulomb3d, FrictionlessProjectionIsTheHalfLine) {
   std::uniform_real_distribution<double> uni(-5.0, 5.0);
   for (int k = 0; k < 2000; ++k) {
     const LocalPair3d y{uni(gen), Vec2(uni(gen), uni(gen))};
-    const LocalPair3d p = project_coulomb_3d(y, 0.0);
+    const LocalPair3d p = project_coulomb(y, 0.0);
     ASSERT_EQ(p.n, std::max(0.0, y.n));
     ASSERT_EQ(p.t.x(), 0.0);
     ASSERT_EQ(p.t.y(), 0.0);
@@ -251,10 +251,10 @@ TEST(Coulomb3d, ProjectionIsPositivelyHomogeneousAtExtremeScales) {
   for (double mu : {0.1, 0.5, 2.0}) {
     for (int k = 0; k < 1000; ++k) {
       const LocalPair3d y{uni(gen), Vec2(uni(gen), uni(gen))};
-      const LocalPair3d p = project_coulomb_3d(y, mu);
+      const LocalPair3d p = project_coulomb(y, mu);
       for (int e : {-700, 700}) {
         const double s = std::ldexp(1.0, e);
-        const LocalPair3d ps = project_coulomb_3d({s * y.n, Vec2(s * y.t)}, mu);
+        const LocalPair3d ps = project_coulomb({s * y.n, Vec2(s * y.t)}, mu);
         const LocalPair3d back{ps.n / s, Vec2(ps.t / s)};
         ASSERT_LE(dist3(back, p), 8 * kEps * (1.0 + mu) * norm3(y))
             << "mu " << mu << " scale 2^" << e << " y = (" << y.n << ", " << y.t.transpose() << ")";
@@ -264,7 +264,7 @@ TEST(Coulomb3d, ProjectionIsPositivelyHomogeneousAtExtremeScales) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// de_saxce_modified_3d, bipotential_update_3d, solve_local, closed_form_reaction_3d
+// de_saxce_modified_3d, bipotential_update, solve_local, closed_form_reaction
 
 const double kRhos[] = {1e-3, 0.1, 0.5, 1.0, 2.0, 10.0, 1e3};
 
@@ -298,14 +298,14 @@ TEST(Bipotential3d, CoulombStatesAreFixedPointsForAnyRho) {
     const LocalPair3d slip{rn, Vec2(-mu * rn * e)};
     const LocalPair3d xf_slip{-w * rn, Vec2(s * e - w * slip.t)};
     for (double rho : kRhos) {
-      const LocalPair3d a = bipotential_update_3d(stick, xf_stick, w, mu, rho);
+      const LocalPair3d a = bipotential_update(stick, xf_stick, w, mu, rho);
       ASSERT_EQ(a.n, stick.n);
       ASSERT_EQ(a.t.x(), stick.t.x());
       ASSERT_EQ(a.t.y(), stick.t.y());
-      const LocalPair3d b = bipotential_update_3d(slip, xf_slip, w, mu, rho);
+      const LocalPair3d b = bipotential_update(slip, xf_slip, w, mu, rho);
       ASSERT_LE(dist3(b, slip), 16 * kEps * (1.0 + mu) * (rn + rho * s)) << "rho " << rho;
       for (double m : {0.0, mu}) {
-        const LocalPair3d c = bipotential_update_3d({}, {0.3, Vec2(0.7 * e)}, w, m, rho);
+        const LocalPair3d c = bipotential_update({}, {0.3, Vec2(0.7 * e)}, w, m, rho);
         ASSERT_EQ(c.n, 0.0);
         ASSERT_EQ(c.t.x(), 0.0);
         ASSERT_EQ(c.t.y(), 0.0);
@@ -325,8 +325,8 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
   // - the Coulomb law on r and x = x_free + w r: r_n >= 0, |r_t| <= mu r_n, x_n >= 0,
   //   r_n x_n = 0, r_t |x_t| + mu r_n x_t = 0 (stick: x_t = 0; slip: r_t opposite to x_t with
   //   |r_t| = mu r_n), and when clearly slipping (|x_t| > 1e-6 X) those two separately;
-  // - r against coulomb_by_cases, and the status classify_3d gives against the case;
-  // - r against closed_form_reaction_3d (the solver's own closed form).
+  // - r against coulomb_by_cases, and the status classify gives against the case;
+  // - r against closed_form_reaction (the solver's own closed form).
   std::mt19937_64 gen(20101);
   std::uniform_real_distribution<double> uni(0.0, 1.0), angle(0.0, kTwoPi);
   const double tol = 1e-10;
@@ -356,7 +356,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
             // and the iterates then cycle at that floor. Accepted only there: one more update
             // moves r by less than 1e-13 of the problem's scale.
             ++stalled;
-            ASSERT_LE(dist3(bipotential_update_3d(s.r, xf, w, mu, f / w), s.r), 1e-13 * big_r)
+            ASSERT_LE(dist3(bipotential_update(s.r, xf, w, mu, f / w), s.r), 1e-13 * big_r)
                 << "mu " << mu << " f " << f << " w " << w << " xf (" << xf.n << ", " << xf.t.transpose() << ")";
           }
           const LocalPair3d& r = s.r;
@@ -385,7 +385,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
           worst_ref = std::max(worst_ref, err);
           // Status: frictionless contact with a reaction is slip (classify's rule); away from the
           // stick/slip boundary (|r_t| within 1e-9 of mu r_n) the case decides.
-          const ContactStatus status = classify_3d(r, mu);
+          const ContactStatus status = classify(r, mu);
           if (ref.status == ContactStatus::open || mu == 0.0) {
             ASSERT_EQ(status, mu == 0.0 && ref.r.n > 0.0 ? ContactStatus::slip : ref.status);
           } else if (std::abs(tangential_norm_3d(ref.r.t) - mu * ref.r.n) > 1e-9 * big_r) {
@@ -393,7 +393,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
           }
         }
       }
-      const double err_closed = dist3(closed_form_reaction_3d(xf, w, mu), ref.r) / big_r;
+      const double err_closed = dist3(closed_form_reaction(xf, w, mu), ref.r) / big_r;
       ASSERT_LE(err_closed, 16 * kEps) << "closed form: a division and a unit vector, a few eps";
       worst_closed = std::max(worst_closed, err_closed);
     }
@@ -422,7 +422,7 @@ TEST(Bipotential3d, FrictionlessUpdateIsExactAndZeroSlipStaysZero) {
     const LocalPair3d xf{uni(gen) * w, Vec2(uni(gen) * w, uni(gen) * w)};
     const double rn_exact = std::max(0.0, -xf.n / w);
     for (const LocalPair3d& r0 : {LocalPair3d{}, LocalPair3d{std::abs(uni(gen)), Vec2(uni(gen), uni(gen))}}) {
-      const LocalPair3d r1 = bipotential_update_3d(r0, xf, w, 0.0, 1.0 / w);
+      const LocalPair3d r1 = bipotential_update(r0, xf, w, 0.0, 1.0 / w);
       const double tol = 8 * kEps * (norm3(r0) + norm3(xf) / w);
       ASSERT_NEAR(r1.n, rn_exact, tol);
       ASSERT_EQ(r1.t.x(), 0.0);
@@ -442,7 +442,7 @@ TEST(Bipotential3d, FrictionlessUpdateIsExactAndZeroSlipStaysZero) {
         ASSERT_EQ(s0.r.t.x(), 0.0);
         ASSERT_EQ(s0.r.t.y(), 0.0);
       }
-      const LocalPair3d c = closed_form_reaction_3d(xf0, w, mu);
+      const LocalPair3d c = closed_form_reaction(xf0, w, mu);
       ASSERT_EQ(c.n, rn_exact);
       ASSERT_EQ(c.t.x(), 0.0);
       ASSERT_EQ(c.t.y(), 0.0);
@@ -458,13 +458,13 @@ TEST(Bipotential3d, ClassifyOpenStickSlip) {
   std::uniform_real_distribution<double> uni(-5.0, 5.0), angle(0.0, kTwoPi);
   for (int k = 0; k < 100; ++k) {
     const Vec2 e = unit_at(angle(gen));
-    EXPECT_EQ(classify_3d({0.0, Vec2::Zero()}, mu), ContactStatus::open);
-    EXPECT_EQ(classify_3d({-1.0, Vec2::Zero()}, mu), ContactStatus::open);
-    EXPECT_EQ(classify_3d({0.0, Vec2(0.1 * e)}, mu), ContactStatus::open);
-    EXPECT_EQ(classify_3d({1.0, Vec2::Zero()}, mu), ContactStatus::stick);
-    EXPECT_EQ(classify_3d({1.0, Vec2(0.29 * e)}, mu), ContactStatus::stick);
-    EXPECT_EQ(classify_3d({1.0, Vec2(0.31 * e)}, mu), ContactStatus::slip);
-    EXPECT_EQ(classify_3d({1.0, Vec2::Zero()}, 0.0), ContactStatus::slip);
+    EXPECT_EQ(classify({0.0, Vec2::Zero()}, mu), ContactStatus::open);
+    EXPECT_EQ(classify({-1.0, Vec2::Zero()}, mu), ContactStatus::open);
+    EXPECT_EQ(classify({0.0, Vec2(0.1 * e)}, mu), ContactStatus::open);
+    EXPECT_EQ(classify({1.0, Vec2::Zero()}, mu), ContactStatus::stick);
+    EXPECT_EQ(classify({1.0, Vec2(0.29 * e)}, mu), ContactStatus::stick);
+    EXPECT_EQ(classify({1.0, Vec2(0.31 * e)}, mu), ContactStatus::slip);
+    EXPECT_EQ(classify({1.0, Vec2::Zero()}, 0.0), ContactStatus::slip);
   }
   int slips = 0;
   for (int k = 0; k < 20000; ++k) {
@@ -472,7 +472,7 @@ TEST(Bipotential3d, ClassifyOpenStickSlip) {
     const double yt = std::sqrt(y.t.squaredNorm());
     if ((y.n >= 0.0 && yt <= mu * y.n) || mu * yt <= -y.n) continue;
     ++slips;
-    ASSERT_EQ(classify_3d(project_coulomb_3d(y, mu), mu), ContactStatus::slip);
+    ASSERT_EQ(classify(project_coulomb(y, mu), mu), ContactStatus::slip);
   }
   EXPECT_GT(slips, 5000);
 }
@@ -520,17 +520,17 @@ TEST(Coulomb3d, TangentialDataAlongOneTangentGiveThe2dResults) {
     const double scale_update = scale_r + rho * (1.0 + mu) * (std::abs(x.n) + std::abs(x.t));
     const double scale_solve = (std::abs(xf.n) + std::abs(xf.t)) / w * (1.0 + mu);
     for (const Vec2& e : {Vec2(1.0, 0.0), Vec2(0.0, 1.0), Vec2(unit_at(angle(gen)))}) {
-      check("project", project_coulomb(r, mu), project_coulomb_3d(embed(r, e), mu), e, scale_r);
+      check("project", project_coulomb(r, mu), project_coulomb(embed(r, e), mu), e, scale_r);
       const LocalPair3d m = de_saxce_modified_3d(embed(x, e), mu);
       check("modified", {x.n + mu * std::abs(x.t), x.t}, m, e, std::abs(x.n) + (1.0 + mu) * std::abs(x.t));
       check("correct", bipotential_correct(r, x, mu, rho),
-            bipotential_correct_3d(embed(r, e), embed(x, e), mu, rho), e, scale_update);
+            bipotential_correct(embed(r, e), embed(x, e), mu, rho), e, scale_update);
       check("update", bipotential_update(r_cone, xf, w, mu, rho),
-            bipotential_update_3d(embed(r_cone, e), embed(xf, e), w, mu, rho), e,
+            bipotential_update(embed(r_cone, e), embed(xf, e), w, mu, rho), e,
             rn0 * (1.0 + mu) + rho * (1.0 + mu) * (std::abs(xf.n) + std::abs(xf.t) + w * rn0 * (1.0 + mu)));
-      check("closed form", closed_form_reaction(xf, w, mu), closed_form_reaction_3d(embed(xf, e), w, mu), e,
+      check("closed form", closed_form_reaction(xf, w, mu), closed_form_reaction(embed(xf, e), w, mu), e,
             scale_solve);
-      EXPECT_EQ(classify_3d(embed(r, e), mu), classify(r, mu));
+      EXPECT_EQ(classify(embed(r, e), mu), classify(r, mu));
       // The iteration (rho = 1/w): along t1/t2 the same iterates, so the same count and the
       // same result. Along a random e the iterates differ by round-off, and either iteration may
       // stop one update earlier, where |dr| <= 1e-14 |r|: tolerance 1e-13 of the scale.
@@ -557,7 +557,7 @@ TEST(ContactFrame3d, OrthonormalAndRightHandedEverywhere) {
   // (0, 0, +-1) and normals approaching them from 1e-1 to 1e-300 off the axis, the equator with
   // n_z = +0 and -0. (t1, t2, n): unit lengths and dot products to 8 eps (Duff et al. 2017
   // measure a few ulps; the normalised input is itself unit only to ~1 eps), t1 x t2 = n to 8
-  // eps (right-handed, the determinant +1). to_local_3d / to_global_3d are inverse to 8 eps.
+  // eps (right-handed, the determinant +1). ContactFrame<3>::local and global are inverse to 8 eps.
   std::mt19937_64 gen(2017);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<Vec3> normals;
@@ -592,8 +592,9 @@ TEST(ContactFrame3d, OrthonormalAndRightHandedEverywhere) {
     ASSERT_GT(q.determinant(), 0.0);
     worst = std::max({worst, ortho / kEps, hand / kEps});
     const Vec3 v(1.5, -0.25, 3.0);
-    ASSERT_LE((to_global_3d(f, to_local_3d(f, v)) - v).cwiseAbs().maxCoeff(), 8 * kEps * 3.0);
-    const LocalPair3d ln = to_local_3d(f, n);
+    const ContactFrame<3> cf(n);  // the solver's frame: f's vectors
+    ASSERT_LE((cf.global(cf.local(v)) - v).cwiseAbs().maxCoeff(), 8 * kEps * 3.0);
+    const LocalPair3d ln = cf.local(n);
     ASSERT_NEAR(ln.n, 1.0, 8 * kEps);
     ASSERT_LE(ln.t.cwiseAbs().maxCoeff(), 8 * kEps);
   }
@@ -630,12 +631,12 @@ TEST(Coulomb3d, LocalSolveAndFrameDoNotAllocate) {
   before = g_allocations.load();
   for (std::size_t k = 0; k < inputs.size(); ++k) {
     const LocalPair3d& y = inputs[k];
-    const LocalPair3d p = project_coulomb_3d(y, 0.3);
+    const LocalPair3d p = project_coulomb(y, 0.3);
     const LocalSolution3d s = solve_local(y, 0.5, 0.3, 2.0, {}, 1e-14, 1000);
-    const Frame3d f = contact_frame_3d(normals[k]);
-    const Vec3 g = to_global_3d(f, s.r);
-    sink += p.n + s.r.n + g.x() + to_local_3d(f, g).t.y() + closed_form_reaction_3d(y, 0.5, 0.3).n +
-            static_cast<double>(classify_3d(p, 0.3));
+    const ContactFrame<3> f(normals[k]);
+    const Vec3 g = f.global(s.r);
+    sink += p.n + s.r.n + g.x() + f.local(g).t.y() + closed_form_reaction(y, 0.5, 0.3).n +
+            static_cast<double>(classify(p, 0.3));
   }
   const long allocations = g_allocations.load() - before;
   EXPECT_EQ(allocations, 0);

@@ -363,8 +363,9 @@ TEST(Tangent, PatternHasExactlyTheElementCouplings) {
     EXPECT_TRUE(actual == expected) << "pattern differs: " << actual.size() << " vs "
                                     << expected.size();
     std::size_t offset = 0, total = 0;
-    for (const auto& b : model.q4_full) check_slots<4>(b, s, offset);
+    // The slots in the order every pass visits the blocks (kBlockKinds).
     for (const auto& b : model.q4_hourglass) check_slots<4>(b, s, offset);
+    for (const auto& b : model.q4_full) check_slots<4>(b, s, offset);
     for (const auto& b : model.t3) check_slots<3>(b, s, offset);
     for (const auto& b : model.q4_full) total += 64 * b.conn.size();
     for (const auto& b : model.q4_hourglass) total += 64 * b.conn.size();
