@@ -226,28 +226,29 @@ class CondensedContact {
   // bi-potential iteration with rho = 1 / max diag(W_ii).
   Local local_reaction(const ContactSetT<D>& cs, int i, double tol) const {
     const int k = cs.active[i];
+    const int dirs = dirs_;  // a local: the compiler keeps it in a register across the stores
     Local base = x_free_[k];
     for (int j = 0; j < static_cast<int>(cs.active.size()); ++j) {
       if (j == i) continue;
       const Local rj = cs.reaction[cs.active[j]];
-      for (int d = 0; d < dirs_; ++d) {
-        double sum = w_(dirs_ * i + d, dirs_ * j) * rj.n;
-        for (int e = 1; e < dirs_; ++e) sum += w_(dirs_ * i + d, dirs_ * j + e) * component(rj, e);
+      for (int d = 0; d < dirs; ++d) {
+        double sum = w_(dirs * i + d, dirs * j) * rj.n;
+        for (int e = 1; e < dirs; ++e) sum += w_(dirs * i + d, dirs * j + e) * component(rj, e);
         set_component(base, d, component(base, d) + sum);
       }
     }
     Local next{};
-    if (dirs_ == 1) {
+    if (dirs == 1) {
       next.n = std::max(0.0, -base.n / w_(i, i));
       return next;
     }
-    double w_max = w_(dirs_ * i, dirs_ * i);
-    for (int d = 1; d < dirs_; ++d) w_max = std::max(w_max, w_(dirs_ * i + d, dirs_ * i + d));
+    double w_max = w_(dirs * i, dirs * i);
+    for (int d = 1; d < dirs; ++d) w_max = std::max(w_max, w_(dirs * i + d, dirs * i + d));
     auto x_of = [&](const Local& q) {
       Local x = base;
-      for (int d = 0; d < dirs_; ++d) {
+      for (int d = 0; d < dirs; ++d) {
         double xd = component(base, d);
-        for (int e = 0; e < dirs_; ++e) xd += w_(dirs_ * i + d, dirs_ * i + e) * component(q, e);
+        for (int e = 0; e < dirs; ++e) xd += w_(dirs * i + d, dirs * i + e) * component(q, e);
         set_component(x, d, xd);
       }
       return x;

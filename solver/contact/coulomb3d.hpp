@@ -4,8 +4,8 @@
 // bipotential_update(r, x, w, mu, rho), ... for either pair. A braced pair such as {1.0, 0.3}
 // cannot initialize a LocalPair3d (its tangential part, an Eigen vector, has no implicit
 // conversion from a number), so it still means a 2D LocalPair; only an empty {} fits both.
-// Reaction r = (r_n, r_t), relative quantity x = (x_n, x_t) (a gap and slip increment at the position level, a relative velocity at the velocity level),
-// each with a tangential part in the contact's tangent plane, given by its components on
+// Reaction r = (r_n, r_t), relative quantity x = (x_n, x_t) (a gap and slip increment at the
+// position level, a relative velocity at the velocity level), each with a tangential part in the contact's tangent plane, given by its components on
 // (t1, t2); x = x_free + w r with an isotropic local compliance w. Sign convention
 // (docs/background.md, The contact law and the bi-potential): x_n > 0 separates, r_n >= 0 pushes
 // apart, sliding gives r_t = -mu r_n x_t / |x_t|. The formulas are in docs/three-dimensions.md,

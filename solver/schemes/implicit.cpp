@@ -37,7 +37,6 @@ double internal_force_roundoff(const M& model) {
   return f;
 }
 
-
 // The diagonal of A at a node, for the local compliance estimate: the mean over its DOFs.
 inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::integral_constant<int, 2>) {
   return 0.5 / inv_diag[2 * node] + 0.5 / inv_diag[2 * node + 1];
@@ -102,7 +101,8 @@ double ImplicitIntegratorT<M>::residual(bool with_energy) {
   scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
                      model_.mass.cwiseProduct(v0_).template lpNorm<Eigen::Infinity>(),
                      dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
-                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(), dt * condensed_.impulse().template lpNorm<Eigen::Infinity>(),
+                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(),
+                     dt * condensed_.impulse().template lpNorm<Eigen::Infinity>(),
                      dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
   const double scale = scale_;
   return g_.lpNorm<Eigen::Infinity>() / scale;
@@ -123,9 +123,10 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   // back to the free prediction linearly, so that x = x_free + c H y stays the gap where the
   // frame is taken; at convergence that is where the nodes end. Without, at x_pred (the paper's).
   const bool shifted = position && run_.contact.frame_updates > 0;
+  const Eigen::VectorXd& y = condensed_.response();  // of the last iteration's reactions
   auto x_pred = [&](int j) -> Vec {
     if (!shifted) return model_.ref.col(j) + u_pred(j);
-    return model_.ref.col(j) + u_pred(j) + c * condensed_.response().template segment<D>(D * j);
+    return model_.ref.col(j) + u_pred(j) + c * y.template segment<D>(D * j);
   };
   update_boxes(cs, x_pred);
   for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) {
@@ -141,7 +142,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
     double gap = oc.gap;
     if (shifted) {
       Vec shift = Vec::Zero();
-      for (int j = 0; j < st.count; ++j) shift += st.coef[j] * condensed_.response().template segment<D>(D * st.node[j]);
+      for (int j = 0; j < st.count; ++j) shift += st.coef[j] * y.template segment<D>(D * st.node[j]);
       gap -= c * oc.normal.dot(shift);
     }
     // Within a step the engaged set only grows, so Newton cannot cycle between active sets; an
