@@ -12,7 +12,6 @@
 #pragma once
 
 #include <algorithm>
-#include <ranges>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -84,9 +83,13 @@ class CondensedContact {
   // impulse = H^T R over every candidate (the last step's reactions, in the frames and on the
   // stencils they were solved in), or over the active ones.
   void impulse_of_all(const ContactSetT<D>& cs) {
-    impulse_of(cs, std::views::iota(0, static_cast<int>(cs.candidates.size())));
+    impulse_.setZero();
+    for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) add_impulse(cs, k);
   }
-  void impulse_of_active(const ContactSetT<D>& cs) { impulse_of(cs, cs.active); }
+  void impulse_of_active(const ContactSetT<D>& cs) {
+    impulse_.setZero();
+    for (const int k : cs.active) add_impulse(cs, k);
+  }
   // No active contact: R = 0.
   void clear() {
     impulse_.setZero();
@@ -173,14 +176,11 @@ class CondensedContact {
   long exact_solves() const { return exact_solves_; }
 
  private:
-  template <class Ks>
-  void impulse_of(const ContactSetT<D>& cs, const Ks& ks) {
-    impulse_.setZero();
-    for (const int k : ks) {
-      const Vec r = ContactFrame<D>(cs.normal[k]).global(cs.reaction[k]);
-      const Stencil& st = cs.stencil[k];
-      for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
-    }
+  // impulse += H_k^T R_k: contact k's reaction in its frame, spread over its stencil.
+  void add_impulse(const ContactSetT<D>& cs, int k) {
+    const Vec r = ContactFrame<D>(cs.normal[k]).global(cs.reaction[k]);
+    const Stencil& st = cs.stencil[k];
+    for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
   }
 
   // (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
