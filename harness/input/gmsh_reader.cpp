@@ -538,7 +538,7 @@ void Reader::add_cells(const std::vector<const RawElement*>& cells,
   }
 }
 
-// Hexahedra and tetrahedra, each with positive volume in Gmsh's corner order (mesh3.hpp); a
+// Hexahedra and tetrahedra, each with positive volume in Gmsh's corner order (mesh.hpp); a
 // cell of zero volume, negative volume (inverted: not flipped, as a solid mesh has no viewing
 // side to choose) or a folded hexahedron is an error.
 void Reader::add_cells(const std::vector<const RawElement*>& cells,

@@ -6,7 +6,6 @@
 #include <string>
 
 #include "solver/model/mesh.hpp"
-#include "solver/model/mesh3.hpp"
 
 namespace ricochet {
 
@@ -27,7 +26,7 @@ Mesh read_gmsh(const std::filesystem::path& file);
 Mesh parse_gmsh(std::string text, const std::string& name);
 
 // Reads a 3D mesh of 4-node tetrahedra (Gmsh type 4) and 8-node hexahedra (type 5), in Gmsh's
-// corner order, which is VTK's (mesh3.hpp); coordinates are taken as metres.
+// corner order, which is VTK's (mesh.hpp); coordinates are taken as metres.
 // - Nodes, cells and duplicates as read_gmsh: nodes renumbered in increasing tag, keeping only
 //   nodes used by a cell; cells by element tag, hexahedra then tetrahedra in Mesh3.
 // - Node sets: every physical group of points (15), lines (1), surfaces (2, 3) or volumes

@@ -9,7 +9,6 @@
 #pragma once
 
 #include "solver/model/mesh.hpp"
-#include "solver/model/mesh3.hpp"
 #include "solver/core/types.hpp"
 
 namespace ricochet {
@@ -17,7 +16,7 @@ namespace ricochet {
 // An axis-aligned box [origin, origin + size] split into nx x ny x nz hexahedra. Node (i, j, k)
 // has index (k (ny+1) + j) (nx+1) + i, so each layer k is make_rectangle's numbering; cells are
 // in the order k, j, i, hexahedron (i, j, k) with corners (i,j,k), (i+1,j,k), (i+1,j+1,k),
-// (i,j+1,k) and the same at k+1 (the VTK/Gmsh order of mesh3.hpp, positive volume).
+// (i,j+1,k) and the same at k+1 (the VTK/Gmsh order of mesh.hpp, positive volume).
 // With `tetrahedra`, each hexahedron becomes 6 tetrahedra around its main diagonal from corner 0
 // (i,j,k) to corner 6 (i+1,j+1,k+1), one per path along three edges from 0 to 6 (the Kuhn or
 // Freudenthal split): corners (0,1,2,6), (0,2,3,6), (0,3,7,6), (0,7,4,6), (0,4,5,6), (0,5,1,6),

@@ -32,7 +32,7 @@ struct VtuData {
 // their checks are VtuData's; vectors have three components of their own.
 struct VtuData3 {
   Eigen::Matrix3Xd points;                       // 3 x n coordinates [m]
-  std::vector<std::array<int, 8>> hexes;         // VTK_HEXAHEDRON (12), corner order of mesh3.hpp
+  std::vector<std::array<int, 8>> hexes;         // VTK_HEXAHEDRON (12), corner order of mesh.hpp
   std::vector<std::array<int, 4>> tets;          // VTK_TETRA (10); cells are hexes, then tets
   double time = 0.0;                             // [s], FieldData "TimeValue"
   std::vector<std::pair<std::string, Eigen::Matrix3Xd>> point_vectors;  // 3 x n

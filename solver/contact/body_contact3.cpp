@@ -9,7 +9,7 @@ namespace ricochet {
 Surface3 make_surface3(const Model<3>& model, int body) {
   Surface3 s;
   s.body = body;
-  // Boundary faces run counter-clockwise seen from outside (mesh3.hpp; build_model checks
+  // Boundary faces run counter-clockwise seen from outside (mesh.hpp; build_model checks
   // positive volumes), so x_xi x x_eta is outward.
   for (const BoundaryFace& bf : model.bodies[body].boundary_faces) {
     SurfaceFace f;

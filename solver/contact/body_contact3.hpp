@@ -6,7 +6,7 @@
 //
 // The master's surface is its boundary faces (BodyInfo<3>::boundary_faces): quadrilaterals of
 // hexahedra and triangles of tetrahedra, their corners counter-clockwise seen from outside the
-// body (mesh3.hpp), so the right-hand rule gives the outward normal. Each face is parametrized on
+// body (mesh.hpp), so the right-hand rule gives the outward normal. Each face is parametrized on
 // [0, 1]^2 (quadrilateral, bilinear) or on the unit triangle xi, eta >= 0, xi + eta <= 1:
 //   quadrilateral  x(xi, eta) = sum_a N_a x_a, N = ((1-xi)(1-eta), xi(1-eta), xi eta, (1-xi) eta)
 //                  (corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1), 3 at (0, 1));

@@ -30,7 +30,6 @@
 #include "solver/contact/contact_space.hpp"
 #include "solver/contact/coulomb.hpp"
 #include "solver/contact/obstacle.hpp"
-#include "solver/contact/obstacle3.hpp"
 #include "solver/core/loads.hpp"
 #include "solver/core/state.hpp"
 #include "solver/model/model.hpp"

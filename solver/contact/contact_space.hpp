@@ -14,7 +14,6 @@
 #include <type_traits>
 
 #include "solver/contact/coulomb.hpp"
-#include "solver/contact/coulomb3d.hpp"  // local_norm, the 3D local pair and frame
 #include "solver/core/types.hpp"
 
 namespace ricochet {
@@ -38,13 +37,7 @@ struct ContactFrame<2> {
   double tangential(const Vec2& v) const { return t.dot(v); }
 };
 
-// |(dn, dt)| of two local pairs (and local_norm(), coulomb3d.hpp, |(n, t)| of one): the
-// Gauss-Seidel stopping rule.
-inline double local_distance(const LocalPair& a, const LocalPair& b) { return std::hypot(a.n - b.n, a.t - b.t); }
-// The tangential part of a local pair (a scalar in 2D): its magnitude, the value of magnitude
-// `cap` in its direction, and the dot product.
-inline double tangential_abs(double t) { return std::abs(t); }
-inline double tangential_clamp(double cap, double t) { return std::copysign(cap, t); }
+// The tangential part of a local pair (a scalar in 2D): the dot product.
 inline double tangential_dot(double a, double b) { return a * b; }
 // A reaction's share of ContactStep::tangential_force: r_t, signed along t [N].
 inline double tangential_sum_term(const LocalPair& r) { return r.t; }
@@ -52,16 +45,23 @@ inline double tangential_sum_term(const LocalPair& r) { return r.t; }
 // motion, before `scale`): -r_t scale slip [J], >= 0 by the cone.
 inline double slip_work(const LocalPair& r, double scale, double slip) { return -r.t * scale * slip; }
 
-// 3D: the frame of contact_frame_3d(n) (coulomb3d.hpp: t1, t2, n orthonormal, right-handed,
-// built from n alone), the local pair LocalPair3d (r_n; r_t on (t1, t2)).
+// 3D: tangents t1, t2 with (t1, t2, n) orthonormal and right-handed (t1 x t2 = n), the local
+// pair LocalPair3d (r_n; r_t on (t1, t2)). The tangents follow Duff, Burgess, Christensen, Hery,
+// Kensler, Liani & Villemin (2017), "Building an orthonormal basis, revisited", J. Computer
+// Graphics Techniques 6(1), 1-8, Listing 3 (branchless): Frisvad's (2012) construction with the
+// sign of n_z folded in, so that 1 / (sign + n_z) never divides by a cancelled difference
+// (Frisvad's form loses all precision as n_z -> -1). Any frame built from n alone jumps somewhere
+// (here where n_z changes sign); the isotropic Coulomb law does not mind, since a rotation of
+// (t1, t2) in the tangent plane rotates x_t and r_t alike.
 template <>
 struct ContactFrame<3> {
   Vec3 n, t1, t2;
-  explicit ContactFrame(const Vec3& normal) {
-    const Frame3d f = contact_frame_3d(normal);
-    n = f.n;
-    t1 = f.t1;
-    t2 = f.t2;
+  explicit ContactFrame(const Vec3& normal) : n(normal) {
+    const double sign = std::copysign(1.0, n.z());
+    const double a = -1.0 / (sign + n.z());
+    const double b = n.x() * n.y() * a;
+    t1 = Vec3(1.0 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+    t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
   }
   // r_n n + r_t1 t1 + r_t2 t2 [N]
   Vec3 global(const LocalPair3d& r) const { return r.n * n + r.t.x() * t1 + r.t.y() * t2; }
@@ -71,21 +71,19 @@ struct ContactFrame<3> {
   Vec2 tangential(const Vec3& v) const { return Vec2(t1.dot(v), t2.dot(v)); }
 };
 
-// The 3D counterparts of the 2D helpers above; the tangential part is a 2-vector of the tangent
-// plane and |.| is tangential_norm_3d (hypot).
-inline double local_distance(const LocalPair3d& a, const LocalPair3d& b) {
-  return std::hypot(a.n - b.n, tangential_norm_3d(a.t - b.t));
-}
-inline double tangential_abs(const Vec2& t) { return tangential_norm_3d(t); }
-// The value of magnitude `cap` along t (t != 0: called only when |t| > cap >= 0).
-inline Vec2 tangential_clamp(double cap, const Vec2& t) { return cap * (t / tangential_norm_3d(t)); }
+// The 3D counterparts of the 2D helpers above (the tangential part a 2-vector of the tangent plane).
 inline double tangential_dot(const Vec2& a, const Vec2& b) { return a.dot(b); }
 // In 3D a reaction's share of ContactStep::tangential_force is its magnitude |r_t| [N]: the
 // tangents of different contacts are different directions, so only magnitudes add up to a
 // scalar (the history's tangential_force column is then >= 0).
-inline double tangential_sum_term(const LocalPair3d& r) { return tangential_norm_3d(r.t); }
+inline double tangential_sum_term(const LocalPair3d& r) { return tangential_norm(r.t); }
 inline double slip_work(const LocalPair3d& r, double scale, const Vec2& slip) { return -scale * r.t.dot(slip); }
 
+// The value of magnitude `cap` along t (t != 0: called only when |t| > cap >= 0).
+template <class T>
+inline T tangential_clamp(double cap, const T& t) {
+  return tangential_along(cap, t, tangential_norm(t));
+}
 
 // The local problem of one contact, in either dimension: the reaction r such that x(r) and r obey
 // Coulomb's law, found with the bi-potential predictor-corrector (de Saxcé & Feng 1991; Cros,

@@ -218,7 +218,7 @@ void penalty_phase(const M& model, const std::vector<ObstacleOf<M>>& obstacles, 
       const Tangent old = c.reaction[k].t;
       const Tangent trial = old - stiff * ds;
       const double cap = cc.friction_coeff * fn;
-      if (tangential_abs(trial) <= cap) {
+      if (tangential_norm(trial) <= cap) {
         ft = trial;
         if (fn > 0.0) status = ContactStatus::stick;
       } else {

@@ -12,7 +12,7 @@
 // yet).
 //
 // Element arrays: positions, displacements, velocities and forces are 3 x N (column a = node a,
-// VTK corner order, mesh3.hpp). As a flat column-major vector the degrees of freedom run
+// VTK corner order, mesh.hpp). As a flat column-major vector the degrees of freedom run
 // (x0, y0, z0, x1, ...): DOF 3a + i, the row and column order of the element matrices.
 // Gradients are N x 3 (row a = dN_a/dX), as the 2D kernels' Grad4 (N x 2).
 // Sign convention (the 2D one): f is the internal force, f = dE/du for the stored energy E (the
@@ -66,7 +66,7 @@ struct ElementTotals3 {
 // Reference geometry, computed once per cell (element3d.cpp). Each builder returns false (and
 // leaves g unusable) where a Jacobian determinant at a point it uses is <= 0 or not finite;
 // a hexahedron folded at a corner but positive at its points passes (the model checks
-// hex_corner_quality(), mesh3.hpp, as 2D build_model checks q4_corner_quality()).
+// hex_corner_quality(), mesh.hpp, as 2D build_model checks q4_corner_quality()).
 
 // 2x2x2 Gauss points at (xi, eta, zeta) = (s_a / sqrt 3) for the corner signs s_a of corner a
 // (point q next to corner q), weight 1: dN/dX = dN/dxi J^-1 and vol = det J (J = dX/dxi).

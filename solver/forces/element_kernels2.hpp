@@ -427,12 +427,14 @@ template <bool kViscous, class Pass, class Mat, class Out>
   pass.finish(t);
 }
 
-// Calls fn(global cell, the values of its integration points, their reference volumes [m^3],
-// the number of points) for every cell: point(material, F, P, det F) with F at the point and
-// P = mat.first_piola(F). For the stress passes of internal_forces.cpp. The one-point cells
-// (Q4 with hourglass control, T3) first, then the Q4 with 2x2 points.
-template <class Point, class Fn>
-void for_each_cell_points(const Model<2>& model, const double* u, Point&& point, Fn&& fn) {
+// For every cell: add(point(material, F, P, det F), reference volume [m^3], points) at each of
+// its integration points, F at the point and P = mat.first_piola(F), then done(global cell,
+// points), `points` the cell's number of integration points as a std::integral_constant (so that
+// a one-point cell's reduction compiles to nothing). For the stress passes of
+// internal_forces_impl.hpp, which reduce the points of a cell as they come (no array of values). The one-point cells (Q4 with hourglass control, T3)
+// first, then the Q4 with 2x2 points.
+template <class Point, class Add, class Done>
+void for_each_cell_points(const Model<2>& model, const double* u, Point&& point, Add&& add, Done&& done) {
   for (const BlockKind kind : {BlockKind::q4_hourglass, BlockKind::t3, BlockKind::q4_full})
     for (std::size_t k = 0; k < model.num_blocks(kind); ++k)
       visit_block(model, kind, k, [&](const auto& b, const auto& mat, auto) {
@@ -441,16 +443,15 @@ void for_each_cell_points(const Model<2>& model, const double* u, Point&& point,
           const int cell = b.first_cell + static_cast<int>(e);
           if constexpr (std::is_same_v<std::decay_t<decltype(b)>, Q4FullBlock>) {
             const Grad4 ue = gather<4>(u, b.conn[e]);
-            std::array<decltype(point(mat, Mat2(), Mat2(), 1.0)), 4> values;
             for (int q = 0; q < 4; ++q) {
               const Mat2 F = deformation_gradient<4>(ue, b.geom[e].dndx[q]);
-              values[q] = point(mat, F, mat.first_piola(F), F.determinant());
+              add(point(mat, F, mat.first_piola(F), F.determinant()), b.geom[e].vol[q], std::integral_constant<int, 4>{});
             }
-            fn(cell, values.data(), b.geom[e].vol.data(), 4);
+            done(cell, std::integral_constant<int, 4>{});
           } else {
             const Mat2 F = deformation_gradient<N>(gather<N>(u, b.conn[e]), b.geom[e].dndx);
-            const auto value = point(mat, F, mat.first_piola(F), F.determinant());
-            fn(cell, &value, &b.geom[e].vol, 1);
+            add(point(mat, F, mat.first_piola(F), F.determinant()), b.geom[e].vol, std::integral_constant<int, 1>{});
+            done(cell, std::integral_constant<int, 1>{});
           }
         }
       });

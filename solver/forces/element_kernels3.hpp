@@ -733,12 +733,12 @@ template <bool kViscous, class Pass, class Mat, class Out>
   pass.finish(t);
 }
 
-// Calls fn(global cell, the cell's points' values, weights) for every cell in for_each_block's
-// order: point(material, F, P, det F) at each integration point with F from the kernels' arithmetic
-// (element_kernels3.hpp: the force pass's F, bit for bit) and P = mat.first_piola(F), and each
-// point's reference volume. Cells of one point pass one value.
-template <class Point, class Fn>
-void for_each_cell_points(const Model<3>& model, const double* u, Point&& point, Fn&& fn) {
+// For every cell in for_each_block's order: add(point(material, F, P, det F), reference volume,
+// points) at each integration point, with F from the kernels' arithmetic (element_kernels3.hpp:
+// the force pass's F, bit for bit) and P = mat.first_piola(F), then done(global cell, points):
+// the contract of the 2D for_each_cell_points (element_kernels2.hpp).
+template <class Point, class Add, class Done>
+void for_each_cell_points(const Model<3>& model, const double* u, Point&& point, Add&& add, Done&& done) {
   for (const BlockKind3 kind : kBlockKinds3)
     for (std::size_t k = 0; k < model.num_blocks(kind); ++k)
       visit_block(model, kind, k, [&](const auto& b, const auto& mat, auto) {
@@ -749,13 +749,10 @@ void for_each_cell_points(const Model<3>& model, const double* u, Point&& point,
           if constexpr (std::is_same_v<Block, Hex8Block>) {
             std::array<Mat3, 8> F;
             hex8_point_gradients(b, e, ue, F);
-            std::array<decltype(point(mat, F[0], F[0], 1.0)), 8> values;
-            std::array<double, 8> vol;
-            for (int q = 0; q < 8; ++q) {
-              values[q] = point(mat, F[q], mat.first_piola(F[q]), F[q].determinant());
-              vol[q] = b.geom(e, Hex8Lanes::vol(q));
-            }
-            fn(cell, values.data(), vol.data(), 8);
+            for (int q = 0; q < 8; ++q)
+              add(point(mat, F[q], mat.first_piola(F[q]), F[q].determinant()), b.geom(e, Hex8Lanes::vol(q)),
+                  std::integral_constant<int, 8>{});
+            done(cell, std::integral_constant<int, 8>{});
           } else {
             Mat3 F;
             double vol;
@@ -766,8 +763,8 @@ void for_each_cell_points(const Model<3>& model, const double* u, Point&& point,
               F = hex8_one_point_gradient(b, e, ue);
               vol = b.geom(e, Hex8OnePointLanes::kVol);
             }
-            const auto value = point(mat, F, mat.first_piola(F), F.determinant());
-            fn(cell, &value, &vol, 1);
+            add(point(mat, F, mat.first_piola(F), F.determinant()), vol, std::integral_constant<int, 1>{});
+            done(cell, std::integral_constant<int, 1>{});
           }
         }
       });

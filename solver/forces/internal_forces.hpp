@@ -2,7 +2,7 @@
 // gather -> F = I + ue^T dN/dX -> P(F) -> fe = vol dN/dX P^T -> scatter. Written once for both
 // dimensions (internal_forces.cpp), instantiated for D = 2 and 3. Flat DOF arrays: u, v, f are
 // D n, interleaved (x0, y0, [z0,] x1, ...). The kernels: element_kernels2.hpp,
-// element_kernels3.hpp; the von Mises equivalents: stress.hpp (2D), stress3.hpp (3D).
+// element_kernels3.hpp; the von Mises equivalents: stress.hpp.
 #pragma once
 
 #include <cstddef>

@@ -22,7 +22,6 @@
 #include "solver/materials/material_lanes.hpp"
 #include "solver/materials/material_lanes3.hpp"
 #include "solver/materials/stress.hpp"
-#include "solver/materials/stress3.hpp"
 
 namespace ricochet {
 namespace {
@@ -234,11 +233,13 @@ void all_blocks(const Model<D>& model, const double* u, const double* v, double*
 // point(material, F, P, det F), a VonMises2 (max_into combines the points).
 template <int D, class Point, class Fn>
 void for_each_cell_stress(const Model<D>& model, const double* u, Point&& point, Fn&& fn) {
-  for_each_cell_points(model, u, point, [&](int cell, const VonMises2* values, const double*, int n) {
-    VonMises2 vm2{0.0, 0.0, 0.0};
-    for (int q = 0; q < n; ++q) max_into(vm2, values[q]);
-    fn(cell, vm2);
-  });
+  VonMises2 vm2{0.0, 0.0, 0.0};
+  for_each_cell_points(
+      model, u, point, [&](const VonMises2& value, double, auto) { max_into(vm2, value); },
+      [&](int cell, auto) {
+        fn(cell, vm2);
+        vm2 = {0.0, 0.0, 0.0};
+      });
 }
 
 // The point value with only `measure`'s entry filled (the others 0): one measure's work.
@@ -337,7 +338,14 @@ void cell_tensors(const Model<D>& model, const double* u, double* cauchy, double
   // One point: its values; several points: the mean weighted by the points' reference volumes
   // (Gauss weight x det J0, x thickness in 2D), i.e. the cell's average by its own quadrature;
   // the plain mean of the four points for a parallelogram.
-  for_each_cell_points(model, u, point, [&](int cell, const Tensors* values, const double* vol, int n) {
+  std::array<Tensors, 8> values;  // a cell's points (at most 8, a hexahedron's)
+  std::array<double, 8> vol;
+  int n = 0;
+  auto add = [&](const Tensors& t, double v, auto) {
+    values[n] = t;
+    vol[n++] = v;
+  };
+  auto done = [&](int cell, auto) {
     double* s = cauchy + 6 * cell;
     double* g = green_lagrange + 6 * cell;
     if (n == 1) {
@@ -345,22 +353,24 @@ void cell_tensors(const Model<D>& model, const double* u, double* cauchy, double
         s[k] = values[0].sigma[k];
         g[k] = values[0].strain[k];
       }
-      return;
-    }
-    SymTensor6 sigma{}, strain{};
-    double volume = 0.0;
-    for (int q = 0; q < n; ++q) {
-      volume += vol[q];
+    } else {
+      SymTensor6 sigma{}, strain{};
+      double volume = 0.0;
+      for (int q = 0; q < n; ++q) {
+        volume += vol[q];
+        for (int k = 0; k < 6; ++k) {
+          sigma[k] += vol[q] * values[q].sigma[k];
+          strain[k] += vol[q] * values[q].strain[k];
+        }
+      }
       for (int k = 0; k < 6; ++k) {
-        sigma[k] += vol[q] * values[q].sigma[k];
-        strain[k] += vol[q] * values[q].strain[k];
+        s[k] = sigma[k] / volume;
+        g[k] = strain[k] / volume;
       }
     }
-    for (int k = 0; k < 6; ++k) {
-      s[k] = sigma[k] / volume;
-      g[k] = strain[k] / volume;
-    }
-  });
+    n = 0;
+  };
+  for_each_cell_points(model, u, point, add, done);
 }
 
 template <int D>

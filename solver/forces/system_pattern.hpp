@@ -1,6 +1,7 @@
-// The fixed sparsity pattern of a SystemMatrix (tangent.hpp), in either dimension:
-// make_system_matrix(const Model<D>&), instantiated in tangent.cpp (D = 2) and tangent3.cpp
-// (D = 3). Index arithmetic only: no floating-point value depends on it.
+// What the assembly of a SystemMatrix (tangent.hpp) does alike in either dimension: the fixed
+// sparsity pattern, make_system_matrix(const Model<D>&) (index arithmetic only: no
+// floating-point value depends on it), and the frame of every assembly, assemble_with().
+// Instantiated in tangent.cpp (D = 2) and tangent3.cpp (D = 3).
 #pragma once
 
 #include <algorithm>
@@ -94,6 +95,20 @@ SystemMatrix make_system_matrix(const Model<D>& model) {
     s.diagonal_slots[d] = static_cast<int>(std::lower_bound(inner + outer[d], inner + outer[d + 1], d) - inner);
   s.diagonal = Eigen::VectorXd::Zero(D * n);
   return s;
+}
+
+// A = m_scale M + (the element matrices): the values zeroed, the lumped mass on the diagonal,
+// add_elements(values) adds the element matrices through the slots and returns the force
+// pass's totals, then the diagonal is copied out (SystemMatrix::diagonal).
+template <int D, class AddElements>
+ForceTotals assemble_with(const Model<D>& model, double m_scale, SystemMatrix& s, AddElements&& add_elements) {
+  const int ndof = model.num_dofs();
+  double* val = s.matrix.valuePtr();
+  std::fill(val, val + s.matrix.nonZeros(), 0.0);
+  for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
+  const ForceTotals t = add_elements(val);
+  for (int d = 0; d < ndof; ++d) s.diagonal[d] = val[s.diagonal_slots[d]];
+  return t;
 }
 
 }  // namespace ricochet

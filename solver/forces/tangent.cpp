@@ -114,23 +114,18 @@ void all_blocks(const Model<2>& model, const double* u, const double* v, double 
 
 template SystemMatrix make_system_matrix<2>(const Model<2>& model);
 
+template <>
 ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
-                            double k_scale, double c_scale, SystemMatrix& s, double* f_int,
-                            bool with_energy) {
-  const int ndof = model.num_dofs();
-  double* val = s.matrix.valuePtr();
-  std::fill(val, val + s.matrix.nonZeros(), 0.0);
-  for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
-  std::fill(f_int, f_int + ndof, 0.0);
-
-  ForceTotals t;
-  if (with_energy)
-    all_blocks<true>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
-  else
-    all_blocks<false>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
-
-  for (int d = 0; d < ndof; ++d) s.diagonal[d] = val[s.diagonal_slots[d]];
-  return t;
+                            double k_scale, double c_scale, SystemMatrix& s, double* f_int, bool with_energy) {
+  return assemble_with(model, m_scale, s, [&](double* val) {
+    std::fill(f_int, f_int + model.num_dofs(), 0.0);
+    ForceTotals t;
+    if (with_energy)
+      all_blocks<true>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
+    else
+      all_blocks<false>(model, u, v, k_scale, c_scale, val, f_int, s.slots.data(), t);
+    return t;
+  });
 }
 
 }  // namespace ricochet

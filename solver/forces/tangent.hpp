@@ -3,8 +3,7 @@
 // element pass assembles the iteration matrix A = m_scale M + k_scale K_T + c_scale C into a sparse
 // matrix of fixed pattern and, in the same pass, the internal forces exactly as internal_forces
 // computes them.
-// DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver; in 3D (x0, y0, z0, x1, ...)
-// (tangent3.cpp: the same two functions for a Model<3>).
+// DOFs are interleaved (x0, y0, x1, ...) as everywhere in the solver; in 3D (x0, y0, z0, x1, ...).
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -38,20 +37,23 @@ SystemMatrix make_system_matrix(const Model<D>& model);
 // where M is the lumped mass (diagonal), K_T = d f_int / d u at velocity v (material + geometric
 // stiffness of every element, plus the stiffness-form hourglass stiffness c gamma gamma^T),
 // C = d f_int / d v (the viscous-form hourglass damping c gamma gamma^T, zero otherwise);
-// in the same element pass writes f_int(u, v) into f_int (same values as internal_forces) and
-// returns the same ForceTotals (energies only when with_energy).
-// `s` must come from make_system_matrix(model). Performs no heap allocation.
-ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
-                            double k_scale, double c_scale, SystemMatrix& s, double* f_int,
-                            bool with_energy);
-
-// The same for a Model<3> (tangent3.cpp): D = 3 DOFs per node and
-// the element matrices of element3d.hpp (hex8_stiffness, hex8_one_point_stiffness,
-// tet4_stiffness) on the geometry rebuilt by cell_geometry() (model3.hpp). f_int and the totals
-// come from the 3D force pass, internal_forces(const Model<3>&, ...), so the Newton residual and
+// writes f_int(u, v) into f_int (same values as internal_forces) and returns the same
+// ForceTotals (energies only when with_energy). The frame is one (assemble_with,
+// system_pattern.hpp); the element matrices are the dimension's: in 2D (tangent.cpp) from the
+// element kernels, in the same pass as the forces; in 3D (tangent3.cpp) those of element3d.hpp
+// (hex8_stiffness, hex8_one_point_stiffness, tet4_stiffness) on the geometry rebuilt by
+// cell_geometry(), with f_int and the totals from the 3D force pass, so the Newton residual and
 // the assembly see the same forces bit for bit.
-ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
+// `s` must come from make_system_matrix(model). Performs no heap allocation.
+template <int D>
+ForceTotals assemble_system(const Model<D>& model, const double* u, const double* v, double m_scale,
                             double k_scale, double c_scale, SystemMatrix& s, double* f_int,
                             bool with_energy);
+template <>
+ForceTotals assemble_system(const Model<2>& model, const double* u, const double* v, double m_scale,
+                            double k_scale, double c_scale, SystemMatrix& s, double* f_int, bool with_energy);
+template <>
+ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
+                            double k_scale, double c_scale, SystemMatrix& s, double* f_int, bool with_energy);
 
 }  // namespace ricochet

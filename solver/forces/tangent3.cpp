@@ -59,31 +59,27 @@ void element_matrix(const Model<3>& model, const Tet4Block& b, std::size_t e, co
 
 template SystemMatrix make_system_matrix<3>(const Model<3>& model);
 
+template <>
 ForceTotals assemble_system(const Model<3>& model, const double* u, const double* v, double m_scale,
-                            double k_scale, double c_scale, SystemMatrix& s, double* f_int,
-                            bool with_energy) {
-  const int ndof = model.num_dofs();
-  double* val = s.matrix.valuePtr();
-  std::fill(val, val + s.matrix.nonZeros(), 0.0);
-  for (int d = 0; d < ndof; ++d) val[s.diagonal_slots[d]] = m_scale * model.mass[d];
-
-  const int* slot = s.slots.data();
-  for_each_cell_block(model, [&](const auto& b) {
-    constexpr int N = std::decay_t<decltype(b)>::kNodes;
-    std::visit(
-        [&](const auto& law) {
-          Nodes3<N> f;
-          ElementMatrix3<N> K;
-          for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 9 * N * N) {
-            element_matrix(model, b, e, law, u, v, k_scale, c_scale, f, K);
-            scatter<N>(val, slot, K);
-          }
-        },
-        b.material);
+                            double k_scale, double c_scale, SystemMatrix& s, double* f_int, bool with_energy) {
+  return assemble_with(model, m_scale, s, [&](double* val) {
+    const int* slot = s.slots.data();
+    for_each_cell_block(model, [&](const auto& b) {
+      constexpr int N = std::decay_t<decltype(b)>::kNodes;
+      std::visit(
+          [&](const auto& law) {
+            Nodes3<N> f;
+            ElementMatrix3<N> K;
+            for (std::size_t e = 0; e < b.conn.size(); ++e, slot += 9 * N * N) {
+              element_matrix(model, b, e, law, u, v, k_scale, c_scale, f, K);
+              scatter<N>(val, slot, K);
+            }
+          },
+          b.material);
+    });
+    // The forces and totals of the 3D force pass, the ones the Newton residual uses.
+    return internal_forces(model, u, v, f_int, with_energy);
   });
-  for (int d = 0; d < ndof; ++d) s.diagonal[d] = val[s.diagonal_slots[d]];
-  // The forces and totals of the 3D force pass, the ones the Newton residual uses.
-  return internal_forces(model, u, v, f_int, with_energy);
 }
 
 }  // namespace ricochet

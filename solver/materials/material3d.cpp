@@ -3,26 +3,14 @@
 #include <cmath>
 
 #include "solver/materials/material.hpp"  // lame_from_young_poisson
+#include "solver/materials/stress.hpp"    // adjugate
 
 namespace ricochet {
 
 namespace {
 
-// cof F = J F^-T: its rows are the cross products of F's rows (row i = row i+1 x row i+2,
-// indices mod 3), written out.
-Mat3 cofactor(const Mat3& F) {
-  Mat3 H;
-  H(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
-  H(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
-  H(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
-  H(1, 0) = F(2, 1) * F(0, 2) - F(2, 2) * F(0, 1);
-  H(1, 1) = F(2, 2) * F(0, 0) - F(2, 0) * F(0, 2);
-  H(1, 2) = F(2, 0) * F(0, 1) - F(2, 1) * F(0, 0);
-  H(2, 0) = F(0, 1) * F(1, 2) - F(0, 2) * F(1, 1);
-  H(2, 1) = F(0, 2) * F(1, 0) - F(0, 0) * F(1, 2);
-  H(2, 2) = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
-  return H;
-}
+// cof F = J F^-T, the transpose of stress.hpp's adjugate.
+Mat3 cofactor(const Mat3& F) { return adjugate(F).transpose(); }
 
 // det F by the first row of F and of its cofactor matrix.
 double determinant(const Mat3& F, const Mat3& H) {

@@ -115,7 +115,7 @@ EIGEN_ALWAYS_INLINE void first_piola_lanes(const NeoHookean3& mat, const LaneMat
     for (int k = 0; k < 9; ++k) P.m[k][l] = mu * F.m[k][l] + s[l] * H.m[k][l];
 }
 
-// von_mises_may_exceed (stress3.hpp) on all lanes for measure kMeasure: may[l] = 1.0 where the
+// von_mises_may_exceed (stress.hpp) on all lanes for measure kMeasure: may[l] = 1.0 where the
 // point of lane l can exceed `threshold` [Pa^2], else 0.0. The same arithmetic as the scalar
 // bound, which is conservative by 0.1 % anyway: a point that passes gets its exact value from
 // the scalar code.

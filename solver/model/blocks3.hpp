@@ -19,7 +19,7 @@
 #include "solver/elements/element3d.hpp"
 #include "solver/elements/hourglass.hpp"
 #include "solver/materials/material3d.hpp"
-#include "solver/model/mesh3.hpp"
+#include "solver/model/mesh.hpp"
 
 namespace ricochet {
 

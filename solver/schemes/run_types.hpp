@@ -50,8 +50,8 @@ struct RelaxationReport {
   std::string reason;         // why it did not converge
 };
 
-// The rigid obstacles of a run, all of its model's dimension: shapes of contact/obstacle.hpp for
-// a Model<2>, of contact/obstacle3.hpp for a Model<3>.
+// The rigid obstacles of a run, all of its model's dimension (contact/obstacle.hpp): Obstacle for
+// a Model<2>, Obstacle3 for a Model<3>.
 using ObstacleList = std::variant<std::vector<Obstacle>, std::vector<Obstacle3>>;
 inline std::size_t obstacle_count(const ObstacleList& l) {
   return std::visit([](const auto& v) { return v.size(); }, l);

@@ -15,7 +15,7 @@
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/input/mesh_generators3.hpp"
-#include "solver/model/mesh3.hpp"
+#include "solver/model/mesh.hpp"
 
 namespace ricochet {
 namespace {
@@ -218,7 +218,7 @@ void expect_error(const std::string& text, int line, const std::string& what) {
   EXPECT_EQ(error_of(text), "m.msh:" + std::to_string(line) + ": " + what);
 }
 
-// A 2.2 file of the unit cube's 8 nodes (in the corner order of mesh3.hpp) with these element
+// A 2.2 file of the unit cube's 8 nodes (in the corner order of mesh.hpp) with these element
 // lines from line 17 on; `node7` replaces the coordinates of node 7, (1, 1, 1).
 std::string cube22(const std::string& elements, int count, const std::string& node7 = "1 1 1") {
   return "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n"
@@ -294,7 +294,7 @@ TEST(Gmsh3, RejectsBadCells) {
                "inverted element 2 (volume -0.166667 < 0); allowed: cells of positive volume in Gmsh's corner order");
   expect_error(cube22("1 4 2 0 1 1 2 3 4\n", 1), 17, "degenerate element 1 (zero volume)");
   expect_error(cube22("1 5 2 0 1 1 2 3 4 1 2 3 4\n", 1), 17, "degenerate element 1 (zero volume)");
-  // Corner 7 at the centre: volume 0.625 > 0, but the corner is folded (mesh3.hpp).
+  // Corner 7 at the centre: volume 0.625 > 0, but the corner is folded (mesh.hpp).
   expect_error(cube22("1 5 2 0 1 1 2 3 4 5 6 7 8\n", 1, "0.5 0.5 0.5"), 17,
                "degenerate element 1 (a corner Jacobian is <= 0: folded hexahedron)");
   EXPECT_EQ(parse_gmsh3(cube22("1 5 2 0 1 1 2 3 4 5 6 7 8\n", 1, "0.7 0.7 0.7"), "m.msh").hexes.size(), 1u);

@@ -1,10 +1,10 @@
-// Verification of the 3D local Coulomb law (solver/contact/coulomb3d.hpp; docs/three-dimensions.md,
+// Verification of the 3D local Coulomb law (solver/contact/coulomb.hpp; docs/three-dimensions.md,
 // Contact in 3D: the Coulomb cone): the projection onto the cone K_mu = {|r_t| <= mu r_n} with a
 // 2D tangent plane against two independent characterisations (Moreau's decomposition, and the
 // nearest point over the cone's generator rays found by a bisection on the angle), its corner
 // cases (r_t = 0, mu = 0, tangential parts of 1e-200 and 1e200); the bi-potential
 // predictor-corrector's fixed points against the Coulomb law itself and against a solve by
-// enumeration of its three cases; the reduction to the 2D functions of coulomb.hpp when the
+// enumeration of its three cases; the reduction to the 2D functions when the
 // tangential data lie along one tangent; the contact frame (Duff et al. 2017); no heap allocation.
 #include <gtest/gtest.h>
 
@@ -20,7 +20,6 @@
 
 #include "solver/contact/contact_space.hpp"  // solve_local
 #include "solver/contact/coulomb.hpp"
-#include "solver/contact/coulomb3d.hpp"
 
 #include "tests/support/alloc_counter.hpp"
 
@@ -141,8 +140,8 @@ TEST(Coulomb3d, ProjectionSatisfiesMoreauDecomposition) {
       const LocalPair3d q{y.n - p.n, Vec2(y.t - p.t)};
       const double residuals[] = {
           -p.n,                                           // p_n >= 0
-          tangential_norm_3d(p.t) - mu * p.n,             // p in K
-          mu * tangential_norm_3d(q.t) + q.n,             // q in K°
+          tangential_norm(p.t) - mu * p.n,             // p in K
+          mu * tangential_norm(q.t) + q.n,             // q in K°
           std::abs(p.n * q.n + p.t.dot(q.t)) / std::max(norm3(y), 1e-300),  // p . q = 0
       };
       for (double res : residuals) {
@@ -216,7 +215,7 @@ TEST(Coulomb3d, ProjectionWithZeroTangentialPartHasNoNaN) {
   for (double mu : {0.0, 0.3, 2.0}) {
     for (double rn : {-2.0, -1e-300, -0.0, 0.0, 1e-300, 2.0}) {
       for (const Vec2& t : {Vec2(0.0, 0.0), Vec2(-0.0, 0.0), Vec2(0.0, -0.0), Vec2(-0.0, -0.0)}) {
-        const LocalPair3d p = project_coulomb({rn, t}, mu);
+        const LocalPair3d p = project_coulomb(LocalPair3d{rn, t}, mu);
         EXPECT_TRUE(std::isfinite(p.n) && std::isfinite(p.t.x()) && std::isfinite(p.t.y()))
             << "mu " << mu << " rn " << rn;
         EXPECT_EQ(p.n, std::max(0.0, rn)) << "mu " << mu << " rn " << rn;
@@ -254,7 +253,7 @@ TEST(Coulomb3d, ProjectionIsPositivelyHomogeneousAtExtremeScales) {
       const LocalPair3d p = project_coulomb(y, mu);
       for (int e : {-700, 700}) {
         const double s = std::ldexp(1.0, e);
-        const LocalPair3d ps = project_coulomb({s * y.n, Vec2(s * y.t)}, mu);
+        const LocalPair3d ps = project_coulomb(LocalPair3d{s * y.n, Vec2(s * y.t)}, mu);
         const LocalPair3d back{ps.n / s, Vec2(ps.t / s)};
         ASSERT_LE(dist3(back, p), 8 * kEps * (1.0 + mu) * norm3(y))
             << "mu " << mu << " scale 2^" << e << " y = (" << y.n << ", " << y.t.transpose() << ")";
@@ -264,20 +263,20 @@ TEST(Coulomb3d, ProjectionIsPositivelyHomogeneousAtExtremeScales) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// de_saxce_modified_3d, bipotential_update, solve_local, closed_form_reaction
+// de_saxce_modified, bipotential_update, solve_local, closed_form_reaction
 
 const double kRhos[] = {1e-3, 0.1, 0.5, 1.0, 2.0, 10.0, 1e3};
 
 TEST(Bipotential3d, ModifiedVelocityAddsMuTimesSlipToTheNormal) {
   // x + mu |x_t| n: hand values with |x_t| = 5 (a 3-4-5 triangle, exact), and x_t = 0.
   const LocalPair3d x{-1.0, Vec2(3.0, -4.0)};
-  const LocalPair3d m = de_saxce_modified_3d(x, 0.5);
+  const LocalPair3d m = de_saxce_modified(x, 0.5);
   EXPECT_EQ(m.n, -1.0 + 2.5);
   EXPECT_EQ(m.t.x(), 3.0);
   EXPECT_EQ(m.t.y(), -4.0);
-  const LocalPair3d m0 = de_saxce_modified_3d({0.7, Vec2(0.0, -0.0)}, 0.5);
+  const LocalPair3d m0 = de_saxce_modified(LocalPair3d{0.7, Vec2(0.0, -0.0)}, 0.5);
   EXPECT_EQ(m0.n, 0.7);
-  EXPECT_EQ(de_saxce_modified_3d(x, 0.0).n, -1.0);
+  EXPECT_EQ(de_saxce_modified(x, 0.0).n, -1.0);
 }
 
 TEST(Bipotential3d, CoulombStatesAreFixedPointsForAnyRho) {
@@ -305,7 +304,7 @@ TEST(Bipotential3d, CoulombStatesAreFixedPointsForAnyRho) {
       const LocalPair3d b = bipotential_update(slip, xf_slip, w, mu, rho);
       ASSERT_LE(dist3(b, slip), 16 * kEps * (1.0 + mu) * (rn + rho * s)) << "rho " << rho;
       for (double m : {0.0, mu}) {
-        const LocalPair3d c = bipotential_update({}, {0.3, Vec2(0.7 * e)}, w, m, rho);
+        const LocalPair3d c = bipotential_update(LocalPair3d{}, LocalPair3d{0.3, Vec2(0.7 * e)}, w, m, rho);
         ASSERT_EQ(c.n, 0.0);
         ASSERT_EQ(c.t.x(), 0.0);
         ASSERT_EQ(c.t.y(), 0.0);
@@ -361,13 +360,13 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
           }
           const LocalPair3d& r = s.r;
           const LocalPair3d x{xf.n + w * r.n, Vec2(xf.t + w * r.t)};
-          const double rt = tangential_norm_3d(r.t), xt = tangential_norm_3d(x.t);
+          const double rt = tangential_norm(r.t), xt = tangential_norm(x.t);
           const double law[] = {
               -r.n / big_r,
               (rt - mu * r.n) / big_r,
               -x.n / big_x,
               std::abs(r.n * x.n) / (big_r * big_x),
-              tangential_norm_3d(r.t * xt + mu * r.n * x.t) / (big_r * big_x),
+              tangential_norm(r.t * xt + mu * r.n * x.t) / (big_r * big_x),
           };
           for (double res : law) {
             ASSERT_LE(res, tol) << "mu " << mu << " f " << f << " w " << w << " xf (" << xf.n << ", "
@@ -376,7 +375,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
           }
           if (xt > 1e-6 * big_x) {  // clearly slipping
             ASSERT_LE(std::abs(rt - mu * r.n), tol * big_r);
-            ASSERT_LE(tangential_norm_3d(r.t + mu * r.n * (x.t / xt)), tol * big_r);
+            ASSERT_LE(tangential_norm(r.t + mu * r.n * (x.t / xt)), tol * big_r);
           }
           const double err = dist3(r, ref.r) / big_r;
           ASSERT_LE(err, tol) << "mu " << mu << " f " << f << " w " << w << " xf (" << xf.n << ", "
@@ -388,7 +387,7 @@ TEST(Bipotential3d, FixedPointSatisfiesCoulombLawAndMatchesCaseEnumeration) {
           const ContactStatus status = classify(r, mu);
           if (ref.status == ContactStatus::open || mu == 0.0) {
             ASSERT_EQ(status, mu == 0.0 && ref.r.n > 0.0 ? ContactStatus::slip : ref.status);
-          } else if (std::abs(tangential_norm_3d(ref.r.t) - mu * ref.r.n) > 1e-9 * big_r) {
+          } else if (std::abs(tangential_norm(ref.r.t) - mu * ref.r.n) > 1e-9 * big_r) {
             ASSERT_EQ(status, ref.status) << "mu " << mu << " w " << w;
           }
         }
@@ -458,13 +457,13 @@ TEST(Bipotential3d, ClassifyOpenStickSlip) {
   std::uniform_real_distribution<double> uni(-5.0, 5.0), angle(0.0, kTwoPi);
   for (int k = 0; k < 100; ++k) {
     const Vec2 e = unit_at(angle(gen));
-    EXPECT_EQ(classify({0.0, Vec2::Zero()}, mu), ContactStatus::open);
-    EXPECT_EQ(classify({-1.0, Vec2::Zero()}, mu), ContactStatus::open);
-    EXPECT_EQ(classify({0.0, Vec2(0.1 * e)}, mu), ContactStatus::open);
-    EXPECT_EQ(classify({1.0, Vec2::Zero()}, mu), ContactStatus::stick);
-    EXPECT_EQ(classify({1.0, Vec2(0.29 * e)}, mu), ContactStatus::stick);
-    EXPECT_EQ(classify({1.0, Vec2(0.31 * e)}, mu), ContactStatus::slip);
-    EXPECT_EQ(classify({1.0, Vec2::Zero()}, 0.0), ContactStatus::slip);
+    EXPECT_EQ(classify(LocalPair3d{0.0, Vec2::Zero()}, mu), ContactStatus::open);
+    EXPECT_EQ(classify(LocalPair3d{-1.0, Vec2::Zero()}, mu), ContactStatus::open);
+    EXPECT_EQ(classify(LocalPair3d{0.0, Vec2(0.1 * e)}, mu), ContactStatus::open);
+    EXPECT_EQ(classify(LocalPair3d{1.0, Vec2::Zero()}, mu), ContactStatus::stick);
+    EXPECT_EQ(classify(LocalPair3d{1.0, Vec2(0.29 * e)}, mu), ContactStatus::stick);
+    EXPECT_EQ(classify(LocalPair3d{1.0, Vec2(0.31 * e)}, mu), ContactStatus::slip);
+    EXPECT_EQ(classify(LocalPair3d{1.0, Vec2::Zero()}, 0.0), ContactStatus::slip);
   }
   int slips = 0;
   for (int k = 0; k < 20000; ++k) {
@@ -521,7 +520,7 @@ TEST(Coulomb3d, TangentialDataAlongOneTangentGiveThe2dResults) {
     const double scale_solve = (std::abs(xf.n) + std::abs(xf.t)) / w * (1.0 + mu);
     for (const Vec2& e : {Vec2(1.0, 0.0), Vec2(0.0, 1.0), Vec2(unit_at(angle(gen)))}) {
       check("project", project_coulomb(r, mu), project_coulomb(embed(r, e), mu), e, scale_r);
-      const LocalPair3d m = de_saxce_modified_3d(embed(x, e), mu);
+      const LocalPair3d m = de_saxce_modified(embed(x, e), mu);
       check("modified", {x.n + mu * std::abs(x.t), x.t}, m, e, std::abs(x.n) + (1.0 + mu) * std::abs(x.t));
       check("correct", bipotential_correct(r, x, mu, rho),
             bipotential_correct(embed(r, e), embed(x, e), mu, rho), e, scale_update);
@@ -550,7 +549,7 @@ TEST(Coulomb3d, TangentialDataAlongOneTangentGiveThe2dResults) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// contact_frame_3d
+// ContactFrame<3>
 
 TEST(ContactFrame3d, OrthonormalAndRightHandedEverywhere) {
   // Random unit normals (normalised Gaussian triples: uniform on the sphere), the poles
@@ -580,7 +579,7 @@ TEST(ContactFrame3d, OrthonormalAndRightHandedEverywhere) {
   }
   double worst = 0.0;
   for (const Vec3& n : normals) {
-    const Frame3d f = contact_frame_3d(n);
+    const ContactFrame<3> f(n);
     ASSERT_EQ(f.n, n);
     Eigen::Matrix3d q;
     q << f.t1, f.t2, f.n;
@@ -592,16 +591,15 @@ TEST(ContactFrame3d, OrthonormalAndRightHandedEverywhere) {
     ASSERT_GT(q.determinant(), 0.0);
     worst = std::max({worst, ortho / kEps, hand / kEps});
     const Vec3 v(1.5, -0.25, 3.0);
-    const ContactFrame<3> cf(n);  // the solver's frame: f's vectors
-    ASSERT_LE((cf.global(cf.local(v)) - v).cwiseAbs().maxCoeff(), 8 * kEps * 3.0);
-    const LocalPair3d ln = cf.local(n);
+    ASSERT_LE((f.global(f.local(v)) - v).cwiseAbs().maxCoeff(), 8 * kEps * 3.0);
+    const LocalPair3d ln = f.local(n);
     ASSERT_NEAR(ln.n, 1.0, 8 * kEps);
     ASSERT_LE(ln.t.cwiseAbs().maxCoeff(), 8 * kEps);
   }
   std::printf("[coulomb3d] frame: %zu normals, max orthonormality / handedness error %.2f eps (tolerance 8)\n",
               normals.size(), worst);
   // The poles themselves, exactly: (0, 0, 1) -> t1 = x, t2 = y; (0, 0, -1) -> t1 = x, t2 = -y.
-  const Frame3d up = contact_frame_3d(Vec3(0.0, 0.0, 1.0)), down = contact_frame_3d(Vec3(0.0, 0.0, -1.0));
+  const ContactFrame<3> up(Vec3(0.0, 0.0, 1.0)), down(Vec3(0.0, 0.0, -1.0));
   EXPECT_EQ(up.t1, Vec3(1.0, 0.0, 0.0));
   EXPECT_EQ(up.t2, Vec3(0.0, 1.0, 0.0));
   EXPECT_EQ(down.t1, Vec3(1.0, 0.0, 0.0));

@@ -1,11 +1,11 @@
-// Rigid obstacles in 3D (solver/contact/obstacle3.hpp; docs/three-dimensions.md, Rigid obstacles
+// Rigid obstacles in 3D (solver/contact/obstacle.hpp; docs/three-dimensions.md, Rigid obstacles
 // in 3D): the gap and normal of each kind (plane, sphere, box, cylinder) against independent
 // computations on random points: the distance by a brute-force minimization over the obstacle's
 // boundary, the closest point and normal by an explicit enumeration of the boundary's faces, the
 // side by a membership test; the plane against the 2D line (obstacle.hpp) bit for bit; the
 // degenerate points and ties; the step frame (exact for a plane, the chord's midpoint for the
 // others, below the gap outside the convex solids and above it inside bowls, bins and pipes);
-// the constructors' checks; the no-suffix overloads of the 3D local law (coulomb3d.hpp); no heap
+// the constructors' checks; the overloads of the local law for the 3D pair (coulomb.hpp); no heap
 // allocation.
 #include <gtest/gtest.h>
 
@@ -23,9 +23,9 @@
 #include <Eigen/Geometry>  // cross()
 
 #include "solver/contact/coulomb.hpp"
-#include "solver/contact/coulomb3d.hpp"
+#include "solver/contact/contact_space.hpp"
 #include "solver/contact/obstacle.hpp"
-#include "solver/contact/obstacle3.hpp"
+#include "solver/contact/obstacle.hpp"
 
 #include "tests/support/alloc_counter.hpp"
 
@@ -83,7 +83,7 @@ double brute_force_distance(const Vec3& x, const Q& q, double u0, double u1, dou
   return std::sqrt(best);
 }
 
-// What the tests know about a point, computed without obstacle3.cpp: the distance to the
+// What the tests know about a point, computed without obstacle.cpp: the distance to the
 // boundary by brute force, the closest point q and the outward normal (of the solid) by an
 // enumeration of the boundary's faces, whether x is inside the solid, and the length scale of
 // the comparison (|x - c| + the obstacle's size).
@@ -823,7 +823,7 @@ TEST(Obstacles3, QueriesDoNotAllocate) {
   for (const Obstacle3& ob : obs)
     for (std::size_t k = 0; k + 1 < xs.size(); ++k) {
       const ObstacleContact3 c = closest(ob, xs[k]), f = step_frame(ob, xs[k], xs[k + 1]);
-      sink += c.gap + f.gap + f.frame().t1.x();
+      sink += c.gap + f.gap + ContactFrame<3>(f.normal).t1.x();
     }
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_TRUE(std::isfinite(sink));

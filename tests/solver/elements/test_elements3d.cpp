@@ -22,7 +22,7 @@
 
 #include "harness/input/mesh_generators3.hpp"
 #include "solver/elements/element3d.hpp"
-#include "solver/model/mesh3.hpp"
+#include "solver/model/mesh.hpp"
 #include "tests/support/matrix_checks.hpp"
 
 #include "tests/support/alloc_counter.hpp"

@@ -1,5 +1,5 @@
 // Tests of the 3D force pass (solver/forces/internal_forces3.hpp, element_kernels3.hpp,
-// material_lanes3.hpp, stress3.hpp): the pass against element3d.hpp's kernels of one cell (the
+// material_lanes3.hpp, stress.hpp): the pass against element3d.hpp's kernels of one cell (the
 // independent formulation), against the kernels' own arithmetic run one cell at a time (the
 // lanes: bit for bit without floating-point contraction), rigid motions, the patch test, forces
 // as the energy's gradient, the threaded pass for 1 and 2 threads, the stress tracking against the
@@ -22,7 +22,7 @@
 
 #include "solver/forces/element_kernels3.hpp"
 #include "solver/forces/internal_forces.hpp"
-#include "solver/materials/stress3.hpp"
+#include "solver/materials/stress.hpp"
 #include "solver/schemes/threads.hpp"
 #include "tests/support/meshes3.hpp"
 
@@ -526,7 +526,7 @@ TEST(InternalForces3, StressTrackingEqualsTheSeparatePasses) {
       }
 }
 
-// The 3D von Mises (stress3.hpp) against an independent computation with Eigen: sigma = P F^T / J,
+// The 3D von Mises (stress.hpp) against an independent computation with Eigen: sigma = P F^T / J,
 // S = F^-1 P, tau = P F^T, each symmetrized, vm = sqrt(3/2 dev A : dev A); the Green-Lagrange
 // strain (F^T F - I)/2; and the screen's bound never below the exact value. Random F (det F in
 // [0.5, 2]) and P of each law. Bound 1e-13 relative: the two compute the same sums of about 20

@@ -1,4 +1,4 @@
-// Tests of the 3D mesh (solver/model/mesh3.hpp) and its generators (harness/input/
+// Tests of the 3D mesh (solver/model/mesh.hpp) and its generators (harness/input/
 // mesh_generators3.hpp): volumes against closed forms and the divergence theorem, corner
 // quality, the boundary-face finder against an independent count, the box (hexahedra and the
 // 6-tetrahedra split), the extrusion of the 2D generators, node sets and rejected parameters.
@@ -19,7 +19,7 @@
 #include "harness/input/input_error.hpp"
 #include "harness/input/mesh_generators.hpp"
 #include "harness/input/mesh_generators3.hpp"
-#include "solver/model/mesh3.hpp"
+#include "solver/model/mesh.hpp"
 
 namespace ricochet {
 namespace {
@@ -27,7 +27,7 @@ namespace {
 using Hex = std::array<int, 8>;
 using Tet = std::array<int, 4>;
 
-// The unit cube in the corner order of mesh3.hpp.
+// The unit cube in the corner order of mesh.hpp.
 Mesh3 unit_cube() {
   Mesh3 m;
   m.nodes.resize(3, 8);

@@ -114,7 +114,7 @@ TEST(Model3, ShapeAndNumbering) {
 }
 
 // The lumped masses: the row sums of element3d.hpp assembled in cell order (the same numbers,
-// so exactly), equal in x, y and z, and summing to rho V with V from mesh3.hpp's volumes.
+// so exactly), equal in x, y and z, and summing to rho V with V from mesh.hpp's volumes.
 TEST(Model3, MassesSumToDensityTimesVolume) {
   double worst = 0.0;
   for (const Kind kind : kAllKinds)
