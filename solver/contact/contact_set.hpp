@@ -381,7 +381,10 @@ void for_each_candidate_depth(const M& model, const std::vector<ObstacleOf<M>>& 
   auto position = [&](int j) -> Vec { return model.ref.col(j) + u.template segment<D>(D * j); };
   int boxed = -1;
   typename Space<D>::Box box;
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
+  // The count read once: fn writes through references, so the compiler would otherwise reload
+  // candidates.size() at every candidate.
+  const std::size_t n = candidates.size();
+  for (std::size_t k = 0; k < n; ++k) {
     if (skip(k)) continue;
     const ContactCandidate& cc = candidates[k];
     const Vec x = position(cc.node);
