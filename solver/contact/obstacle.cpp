@@ -61,12 +61,25 @@ std::string obstacle_error(const Obstacle& ob) {
   return who + "unknown kind";
 }
 
+namespace {
+
+// A circle (2D) or a sphere (3D) of centre c and radius r: g = |x - c| - r and n = (x - c)/|x - c|
+// outside (inside = false), both negated inside; n = +y at x = c.
+template <int D>
+ObstacleContactT<D> closest_round(const Eigen::Matrix<double, D, 1>& c, double r, bool inside,
+                                  const Eigen::Matrix<double, D, 1>& x) {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  const Vec v = x - c;
+  const double d = v.norm();
+  const double sign = inside ? -1.0 : 1.0;
+  const Vec radial = d > 0.0 ? Vec(v / d) : Vec(Vec::UnitY());
+  return {sign * (d - r), sign * radial};
+}
+
+}  // namespace
+
 ObstacleContact closest_circle(const Obstacle& ob, const Vec2& x) {
-  const Vec2 r = x - ob.center;
-  const double d = r.norm();
-  const double sign = ob.inside ? -1.0 : 1.0;
-  const Vec2 radial = d > 0.0 ? Vec2(r / d) : Vec2(Vec2::UnitY());
-  return {sign * (d - ob.radius), sign * radial};
+  return closest_round<2>(ob.center, ob.radius, ob.inside, x);
 }
 
 ObstacleContact closest_polyline(const Obstacle& ob, const Vec2& x) {
@@ -221,11 +234,7 @@ Vec3 cylinder_fallback_radial(const Vec3& axis) {
 }
 
 ObstacleContact3 closest_sphere(const Obstacle3& ob, const Vec3& x) {
-  const Vec3 r = x - ob.center;
-  const double d = r.norm();
-  const double sign = ob.inside ? -1.0 : 1.0;
-  const Vec3 radial = d > 0.0 ? Vec3(r / d) : Vec3(Vec3::UnitY());
-  return {sign * (d - ob.radius), sign * radial};
+  return closest_round<3>(ob.center, ob.radius, ob.inside, x);
 }
 
 ObstacleContact3 closest_box(const Obstacle3& ob, const Vec3& x) {
