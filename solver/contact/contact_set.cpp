@@ -115,10 +115,9 @@ template <class M>
 double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                    const std::vector<typename Space<M::kDim>::Surface>& surfaces,
                    const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u) {
+  CandidateDepth<M> depth_of(model, obstacles, surfaces, u);
   double depth = 0.0;
-  for_each_candidate_depth(
-      model, obstacles, surfaces, candidates, u, [](std::size_t) { return false; },
-      [&](std::size_t, double d) { depth = std::max(depth, d); });
+  for (const ContactCandidate& cc : candidates) depth = std::max(depth, depth_of.unclamped(cc));
   return depth;
 }
 

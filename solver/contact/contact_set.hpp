@@ -366,42 +366,47 @@ void node_contact_fields(const M& model, const std::vector<ObstacleOf<M>>& obsta
                          const ContactSetT<M::kDim>& c, const Eigen::VectorXd& u, double* force, double* gap,
                          int* status);
 
-// Calls fn(k, depth) for every candidate k that skip(k) leaves in, with its depth at u (>= 0) [m]:
-// behind its obstacle (minus closest()'s gap, when negative), or inside its pair's master body
-// (depth_inside). A node outside the bounding box of the master surface's nodes is outside the
-// body: only nodes inside it are measured against every segment (face). A pair's candidates are
-// contiguous, so the box is taken once per pair. Allocates nothing.
-template <class M, class Skip, class Fn>
-void for_each_candidate_depth(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
-                              const std::vector<typename Space<M::kDim>::Surface>& surfaces,
-                              const std::vector<ContactCandidate>& candidates, const Eigen::VectorXd& u,
-                              const Skip& skip, const Fn& fn) {
-  constexpr int D = M::kDim;
+// The depth of one candidate at u (>= 0) [m]: behind its obstacle (minus closest()'s gap, when
+// negative), or inside its pair's master body (depth_inside). A node outside the bounding box of
+// the master surface's nodes is outside the body: only nodes inside it are measured against every
+// segment (face). A pair's candidates are contiguous, so the box is kept from one call to the next
+// and taken again only when the pair changes. Allocates nothing.
+template <class M>
+class CandidateDepth {
+ public:
+  static constexpr int D = M::kDim;
   using Vec = VecD<D>;
-  auto position = [&](int j) -> Vec { return model.ref.col(j) + u.template segment<D>(D * j); };
-  int boxed = -1;
-  typename Space<D>::Box box;
-  // The count read once: fn writes through references, so the compiler would otherwise reload
-  // candidates.size() at every candidate.
-  const std::size_t n = candidates.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    if (skip(k)) continue;
-    const ContactCandidate& cc = candidates[k];
+  CandidateDepth(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
+                 const std::vector<typename Space<D>::Surface>& surfaces, const Eigen::VectorXd& u)
+      : model_(model), obstacles_(obstacles), surfaces_(surfaces), u_(u) {}
+
+  double operator()(const ContactCandidate& cc) { return std::max(0.0, unclamped(cc)); }
+
+  // The same before the clamp at 0: minus the gap, negative in front of an obstacle (the
+  // largest over candidates clamps once: penetration()).
+  double unclamped(const ContactCandidate& cc) {
     const Vec x = position(cc.node);
-    if (cc.pair < 0) {
-      fn(k, std::max(0.0, -closest(obstacles[cc.obstacle], x).gap));
-      continue;
+    if (cc.pair < 0) return -closest(obstacles_[cc.obstacle], x).gap;
+    if (cc.pair != boxed_) {
+      box_ = surface_box(surfaces_.at(cc.pair), [this](int j) { return position(j); }, 0.0);
+      boxed_ = cc.pair;
     }
-    if (cc.pair != boxed) {
-      box = surface_box(surfaces.at(cc.pair), position, 0.0);
-      boxed = cc.pair;
-    }
-    fn(k, box.contains(x) ? depth_inside(model, surfaces[cc.pair], u, x) : 0.0);
+    return box_.contains(x) ? depth_inside(model_, surfaces_[cc.pair], u_, x) : 0.0;
   }
-}
+
+ private:
+  Vec position(int j) const { return model_.ref.col(j) + u_.template segment<D>(D * j); }
+
+  const M& model_;
+  const std::vector<ObstacleOf<M>>& obstacles_;
+  const std::vector<typename Space<D>::Surface>& surfaces_;
+  const Eigen::VectorXd& u_;
+  int boxed_ = -1;
+  typename Space<D>::Box box_;
+};
 
 // Largest depth of any candidate node behind its obstacle, or inside its pair's master body
-// (for_each_candidate_depth), at u (>= 0) [m]. Every scheme measures penetration with this.
+// (CandidateDepth), at u (>= 0) [m]. Every scheme measures penetration with this.
 template <class M>
 double penetration(const M& model, const std::vector<ObstacleOf<M>>& obstacles,
                    const std::vector<typename Space<M::kDim>::Surface>& surfaces,

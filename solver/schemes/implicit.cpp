@@ -185,15 +185,13 @@ bool ImplicitIntegratorT<M>::solve_contact() {
 
 template <class M>
 bool ImplicitIntegratorT<M>::engage_penetrating() {
+  CandidateDepth<M> depth_of(model_, obstacles_, contact_.surfaces, u1_);
   bool any = false;
-  for_each_candidate_depth(
-      model_, obstacles_, contact_.surfaces, contact_.candidates, u1_, [&](std::size_t k) { return engaged_[k] != 0; },
-      [&](std::size_t k, double depth) {
-        if (depth > 0.0) {
-          engaged_[k] = 1;
-          any = true;
-        }
-      });
+  for (std::size_t k = 0; k < contact_.candidates.size(); ++k) {
+    if (engaged_[k] != 0 || depth_of(contact_.candidates[k]) <= 0.0) continue;
+    engaged_[k] = 1;
+    any = true;
+  }
   return any;
 }
 
