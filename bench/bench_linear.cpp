@@ -3,8 +3,9 @@
 // Newton iteration), per mesh and step: numeric factorization (symbolic analysis done once,
 // outside the timing) and one solve, for CHOLMOD's two methods and Eigen's SimplicialLDLT (the
 // hand-written sparse LDL^T that CHOLMOD replaced measured like the latter; docs/implicit.md),
-// and one Jacobi-PCG solve to 1e-12 for comparison. Times per call; run with
-// --benchmark_repetitions.
+// and one Jacobi-PCG solve to 1e-12 for comparison; on M2 and M2x2 also with the METIS and
+// CHOLMOD nested-dissection orderings (names ending _metis, _nesdis; AMD has none). Times per
+// call, with CHOLMOD's flop count and L's entries; run with --benchmark_repetitions.
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
@@ -47,18 +48,23 @@ const Matrix& iteration_matrix(const std::string& mesh, const std::string& dt) {
 }
 
 enum class Solver { cholmod_supernodal, cholmod_simplicial, eigen_simplicial_ldlt };
+using Ordering = CholmodFactor::Ordering;
 
-void factorize(benchmark::State& state, Solver solver, const std::string& mesh, const std::string& dt) {
+void factorize(benchmark::State& state, Solver solver, Ordering ordering, const std::string& mesh,
+               const std::string& dt) {
   const Matrix& m = iteration_matrix(mesh, dt);
   const auto& a = m.system.matrix;
   Eigen::VectorXd x(a.rows());
   bool ok = true;
   if (solver == Solver::cholmod_supernodal || solver == Solver::cholmod_simplicial) {
     CholmodFactor f;
-    f.analyze(a, solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
-                                                      : CholmodFactor::Method::simplicial);
+    f.analyze(a,
+              solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
+                                                   : CholmodFactor::Method::simplicial,
+              ordering);
     for (auto _ : state) ok = ok && f.factorize(a.valuePtr());
     state.counters["factor_nonzeros"] = f.factor_nonzeros();
+    state.counters["factor_flops"] = f.factor_flops();
   } else {
     const Eigen::SparseMatrix<double> col = a;
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> f;
@@ -72,13 +78,16 @@ void factorize(benchmark::State& state, Solver solver, const std::string& mesh, 
   state.counters["n"] = static_cast<double>(a.rows());
 }
 
-void solve(benchmark::State& state, Solver solver, const std::string& mesh, const std::string& dt) {
+void solve(benchmark::State& state, Solver solver, Ordering ordering, const std::string& mesh,
+           const std::string& dt) {
   const Matrix& m = iteration_matrix(mesh, dt);
   const auto& a = m.system.matrix;
   Eigen::VectorXd x(a.rows());
   CholmodFactor f;
-  f.analyze(a, solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
-                                                    : CholmodFactor::Method::simplicial);
+  f.analyze(a,
+            solver == Solver::cholmod_supernodal ? CholmodFactor::Method::supernodal
+                                                 : CholmodFactor::Method::simplicial,
+            ordering);
   if (!f.factorize(a.valuePtr())) fail(state, "factorization failed");
   for (auto _ : state) {
     f.solve(m.b, x);
@@ -112,18 +121,33 @@ const char* name(Solver s) {
   return "";
 }
 
+// The AMD ordering keeps the names the benchmark had before orderings were compared
+// (cholmod_simplicial); the others add theirs (cholmod_simplicial_metis).
+std::string name(Solver s, Ordering o) {
+  const std::string base = name(s);
+  if (s == Solver::eigen_simplicial_ldlt || o == Ordering::amd) return base;
+  return base + (o == Ordering::metis ? "_metis" : "_nesdis");
+}
+
 void register_all() {
-  for (const char* mesh : {"M1", "M2"})
+  for (const char* mesh : {"M1", "M2", "M2x2", "M2x4"})
     for (const char* dt : {"1e-4", "1e-6"}) {
       const std::string cell = std::string(mesh) + "/dt" + dt;
+      // The orderings compared on M2 and M2x2 (docs/implicit.md); AMD alone elsewhere.
+      const bool orderings = std::string(mesh) == "M2" || std::string(mesh) == "M2x2";
       for (Solver s : {Solver::cholmod_supernodal, Solver::cholmod_simplicial, Solver::eigen_simplicial_ldlt})
-        benchmark::RegisterBenchmark(("linear_factorize/" + std::string(name(s)) + "/" + cell).c_str(),
-                                     [=](benchmark::State& st) { factorize(st, s, mesh, dt); })
-            ->Unit(benchmark::kMillisecond);
+        for (Ordering o : {Ordering::amd, Ordering::metis, Ordering::nesdis}) {
+          if ((s == Solver::eigen_simplicial_ldlt || !orderings) && o != Ordering::amd) continue;
+          benchmark::RegisterBenchmark(("linear_factorize/" + name(s, o) + "/" + cell).c_str(),
+                                       [=](benchmark::State& st) { factorize(st, s, o, mesh, dt); })
+              ->Unit(benchmark::kMillisecond);
+        }
       for (Solver s : {Solver::cholmod_supernodal, Solver::cholmod_simplicial})
-        benchmark::RegisterBenchmark(("linear_solve/" + std::string(name(s)) + "/" + cell).c_str(),
-                                     [=](benchmark::State& st) { solve(st, s, mesh, dt); })
-            ->Unit(benchmark::kMicrosecond);
+        for (Ordering o : {Ordering::amd, Ordering::metis, Ordering::nesdis})
+          if (orderings || o == Ordering::amd)
+            benchmark::RegisterBenchmark(("linear_solve/" + name(s, o) + "/" + cell).c_str(),
+                                         [=](benchmark::State& st) { solve(st, s, o, mesh, dt); })
+                ->Unit(benchmark::kMicrosecond);
       benchmark::RegisterBenchmark(("linear_solve/pcg/" + cell).c_str(),
                                    [=](benchmark::State& st) { pcg_solve(st, mesh, dt); })
           ->Unit(benchmark::kMicrosecond);

@@ -21,7 +21,8 @@ import sys
 # Keys that measure the machine, not the results (the threads a run used follow the load:
 # results are bitwise the same for any count).
 IGNORED = {"wall_seconds", "cpu_seconds", "element_steps_per_second", "written_at", "ricochet_version",
-           "build", "case_file", "overrides", "wall_seconds_min", "wall_seconds_max", "threads", "threads_min"}
+           "build", "case_file", "overrides", "wall_seconds_min", "wall_seconds_max", "threads", "threads_min",
+           "peak_memory_bytes", "phase_seconds"}
 
 
 def flatten(prefix, value, out):

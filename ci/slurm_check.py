@@ -52,11 +52,12 @@ MIN_AGE = 0.5  # s
 # docs/outputs.md): compared by name, or by the last part of a flattened name
 # (relaxation.wall_seconds).
 TIMING = {"wall_seconds", "cpu_seconds", "element_steps_per_second", "wall_seconds_min", "wall_seconds_max",
-          "written_at"}
+          "written_at", "peak_memory_bytes"}
 
 
 def is_timing(column):
-    return column in TIMING or column.rsplit(".", 1)[-1] in TIMING
+    return (column in TIMING or column.rsplit(".", 1)[-1] in TIMING
+            or column.startswith("implicit.phase_seconds."))
 
 
 def read_csv(path):

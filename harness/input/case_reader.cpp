@@ -579,7 +579,7 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     c.implicit.refactor_contraction =
         im->number("refactor_contraction", ImplicitSettings{}.refactor_contraction, Range{0.0, 1.0, false, true});
     c.implicit.refactor_iterations =
-        static_cast<int>(im->integer("refactor_iterations", ImplicitSettings{}.refactor_iterations, 1, 1000));
+        static_cast<int>(im->integer("refactor_iterations", ImplicitSettings{}.refactor_iterations, 0, 1000));
     im->finish();
   }
   if (const auto pe = root.table("penalty")) {

@@ -254,6 +254,12 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     im["linear_iterations"] = r.implicit.linear_iterations;
     im["linear_solver"] = r.implicit.direct_solver ? "direct" : "pcg";
     im["factorizations"] = r.implicit.factorizations;
+    im["refactor_iterations"] = r.implicit.refactor_iterations;
+    im["phase_seconds"] = Json{{"assembly", r.implicit.assembly_seconds},
+                               {"factorization", r.implicit.factorization_seconds},
+                               {"solve", r.implicit.solve_seconds},
+                               {"contact", r.implicit.contact_seconds},
+                               {"residual", r.implicit.residual_seconds}};
     j["implicit"] = im;
   } else {
     j["implicit"] = nullptr;
@@ -271,6 +277,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
   j["threads_min"] = r.timing.threads_min;
   j["wall_seconds"] = r.timing.wall_seconds;
   j["cpu_seconds"] = r.timing.cpu_seconds;
+  j["peak_memory_bytes"] = r.timing.peak_memory_bytes;
   j["element_steps_per_second"] = r.timing.element_steps_per_second;
   j["initial_energy"] = r.initial_energy;
   j["energy_error_max"] = r.energy_error_max;

@@ -5,13 +5,30 @@
 // the scheme's iteration matrix, c its level factor (dt theta at the position level, 1 at the
 // velocity level). The scheme sets each active contact's x_free and diagonal compliance estimate
 // w (set_local); this class solves for R given a solve of A y = b: by Uzawa sweeps (uzawa(), one
-// solve per sweep, fast when A is mass-dominated), or with W built column by column and
-// Gauss-Seidel over the contacts, each local problem on its block W_kk by solve_local_map
-// (exact()). Then impulse() = H^T R and response() = A^-1 (dt H^T R). Sized once (reserve);
-// nothing allocates in a solve.
+// solve per sweep, fast when A is mass-dominated), or with W built exactly and Gauss-Seidel over
+// the contacts, each local problem on its block W_kk by solve_local_map (exact()). Then
+// impulse() = H^T R and response() = A^-1 (dt H^T R). Sized once (reserve); nothing allocates
+// in a solve.
+//
+// W from the nodes' compliance (exact()): a contact direction d on a stencil is H = sum_j coef_j
+// e_(node j) d^T, so every entry of W is made of the blocks u^T E_p^T A^-1 E_q v between the
+// nodes p, q of the active stencils (E_p: node p's D unit vectors) along the directions u, v
+// asked of them. Each node keeps an orthonormal basis: the first direction asked of it alone (a
+// frictionless contact along a fixed normal needs no more), completed to all D directions once
+// another is asked; G holds A^-1 between all the kept (node, basis vector) pairs. A basis
+// vector costs one column A^-1 E_p u, which also gives its entries of G with every kept pair;
+// the new columns of one exact() call are solved together, up to four per sweep over the factor.
+// G stays valid while the factor does, so a contact whose direction, stencil or activity
+// changes costs no solve when its nodes already know the directions. Memory: G over
+// (D x the nodes that can be in a stencil)^2 and W over the active directions; no dense
+// n x contacts storage. The response A^-1 dt H^T R is the sum of the columns it needs when they
+// are kept (a pool of columns as large as the integrator allows, by default the factor's
+// nonzeros per row), else one more solve.
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -31,14 +48,6 @@ inline void set_component(LocalPair3d& r, int d, double x) { (d == 0 ? r.n : r.t
 inline Vec2 frame_direction(const ContactFrame<2>& f, int d) { return d == 0 ? f.n : f.t; }
 inline Vec3 frame_direction(const ContactFrame<3>& f, int d) { return d == 0 ? f.n : d == 1 ? f.t1 : f.t2; }
 
-template <int N>
-bool same_stencil(const StencilN<N>& a, const StencilN<N>& b) {
-  if (a.count != b.count) return false;
-  for (int j = 0; j < a.count; ++j)
-    if (a.node[j] != b.node[j] || a.coef[j] != b.coef[j]) return false;
-  return true;
-}
-
 template <int D>
 class CondensedContact {
  public:
@@ -56,20 +65,36 @@ class CondensedContact {
   static constexpr int kLocalMaxUpdates = 200;
 
   // For the candidates of `cs` on `num_dofs` DOFs: with friction each contact has D directions,
-  // without only its normal.
-  void reserve(const ContactSetT<D>& cs, int num_dofs) {
+  // without only its normal. The nodes a stencil can hold are the candidates' nodes and the
+  // master surfaces' nodes.
+  // pool_columns: how many columns A^-1 E_p u to keep for the response (n x pool_columns
+  // doubles; the integrator sizes it like the factor's own storage).
+  void reserve(const ContactSetT<D>& cs, int num_dofs, int pool_columns) {
     const int candidates = static_cast<int>(cs.candidates.size());
     dirs_ = cs.any_friction ? D : 1;
     const int slots = dirs_ * candidates;
     x_free_.assign(candidates, Local{});
     weight_.assign(candidates, 0.0);
-    columns_.resize(num_dofs, slots);
-    column_factor_.assign(slots, -1);
-    column_direction_.assign(slots, Vec::Zero());
-    column_stencil_.assign(slots, Stencil{});
-    active_columns_.reserve(slots);
+    active_directions_.reserve(slots);
     w_.resize(slots, slots);
-    r_vec_.resize(slots);
+    node_cache_.assign(num_dofs / D, -1);
+    std::vector<unsigned char> contact_node(num_dofs / D, 0);
+    for (const ContactCandidate& cc : cs.candidates) contact_node[cc.node] = 1;
+    for (const auto& surface : cs.surfaces)
+      for (int j : surface.nodes) contact_node[j] = 1;
+    const int capacity = static_cast<int>(std::count(contact_node.begin(), contact_node.end(), 1));
+    cached_nodes_.reserve(capacity);
+    basis_.resize(capacity);
+    rank_.assign(capacity, 0);
+    pending_.reserve(D * capacity);
+    g_.resize(D * capacity, D * capacity);
+    pool_.setZero(num_dofs, std::min(pool_columns, D * capacity));
+    pool_index_.assign(D * capacity, -1);
+    slot_weight_.assign(D * capacity, 0.0);
+    touched_.reserve(D * capacity);
+    touched_flag_.assign(D * capacity, 0);
+    unit_.setZero(num_dofs, kMaxBlock);
+    unit_response_.setZero(num_dofs, kMaxBlock);
     for (Eigen::VectorXd* v : {&impulse_, &y_, &rhs_}) v->setZero(num_dofs);
   }
 
@@ -128,23 +153,47 @@ class CondensedContact {
     return false;
   }
 
-  // The exact W and Gauss-Seidel, at most max_sweeps. `factor_id`: the identity of the factor
-  // solve() uses (columns computed with it are reused), or -1 when solve() has no fixed factor
-  // (CG). False only when a linear solve fails; whether Gauss-Seidel converged is converged().
-  template <class Solve>
-  bool exact(ContactSetT<D>& cs, double c, double dt, int max_sweeps, double tol, const Solve& solve, long factor_id) {
+  // The exact W and Gauss-Seidel, at most max_sweeps. `solve_block(b, x, ncol)`: x = A^-1 b for
+  // ncol (1 to 4) columns. `factor_id`: the identity of the factor the solves use (G computed with
+  // it is reused), or -1 when they have no fixed factor (CG: G is computed anew). False only
+  // when a linear solve fails; whether Gauss-Seidel converged is converged().
+  template <class Solve, class SolveBlock>
+  bool exact(ContactSetT<D>& cs, double c, double dt, int max_sweeps, double tol, const Solve& solve,
+             const SolveBlock& solve_block, long factor_id) {
     const int m = dirs_ * static_cast<int>(cs.active.size());
     ++exact_solves_;
     converged_ = false;
-    if (!compute_columns(cs, m, solve, factor_id)) return false;
+    if (factor_id < 0 || factor_id != cache_factor_) forget_nodes(factor_id);
+    pending_.clear();
     for (int a = 0; a < m; ++a) {
-      const Stencil& st = cs.stencil[cs.active[a / dirs_]];
       const Vec d = direction(cs, a);
-      for (int b = 0; b < m; ++b) {
+      const Stencil& st = cs.stencil[cs.active[a / dirs_]];
+      for (int j = 0; j < st.count; ++j) ask(st.node[j], d);
+    }
+    if (!solve_pending(solve_block)) return false;
+    active_directions_.clear();
+    for (int a = 0; a < m; ++a) active_directions_.push_back(direction(cs, a));
+    // W(a, b) = c dt sum_i sum_j coef_i coef_j (d_a . u) (d_b . v) G(u of node i, v of node j).
+    const double cdt = c * dt;
+    for (int a = 0; a < m; ++a) {
+      const Stencil& sa = cs.stencil[cs.active[a / dirs_]];
+      for (int i = 0; i < sa.count; ++i) coords(sa.node[i], active_directions_[a], coord_a_[i]);
+      for (int b = 0; b <= a; ++b) {
+        const Stencil& sb = cs.stencil[cs.active[b / dirs_]];
         double h = 0.0;
-        for (int j = 0; j < st.count; ++j)
-          h += st.coef[j] * d.dot(columns_.col(active_columns_[b]).template segment<D>(D * st.node[j]));
-        w_(a, b) = c * dt * h;
+        for (int j = 0; j < sb.count; ++j) {
+          const int q = sb.node[j];
+          const int bq = D * node_cache_[q];
+          const Vec cb = basis_[node_cache_[q]].transpose() * active_directions_[b];
+          for (int i = 0; i < sa.count; ++i) {
+            const int bp = D * node_cache_[sa.node[i]];
+            double e = 0.0;
+            for (int x = 0; x < rank_[node_cache_[sa.node[i]]]; ++x)
+              for (int y = 0; y < rank_[node_cache_[q]]; ++y) e += coord_a_[i][x] * g_(bp + x, bq + y) * cb[y];
+            h += sa.coef[i] * sb.coef[j] * e;
+          }
+        }
+        w_(a, b) = w_(b, a) = cdt * h;
       }
     }
     for (sweeps_ = 1; sweeps_ <= max_sweeps; ++sweeps_) {
@@ -162,11 +211,11 @@ class CondensedContact {
       }
     }
     sweeps_ = std::min(sweeps_, max_sweeps);
-    for (int a = 0; a < m; ++a) r_vec_[a] = dt * component(cs.reaction[cs.active[a / dirs_]], a % dirs_);
-    y_.setZero();
-    for (int a = 0; a < m; ++a) y_.noalias() += r_vec_[a] * columns_.col(active_columns_[a]);
     impulse_of_active(cs);
-    return true;
+    if (response_from_pool(cs, dt)) return true;
+    rhs_ = dt * impulse_;
+    y_.setZero();
+    return solve(rhs_, y_);
   }
 
   const Eigen::VectorXd& impulse() const { return impulse_; }  // H^T R [N]
@@ -196,26 +245,120 @@ class CondensedContact {
     return frame_direction(ContactFrame<D>(cs.normal[cs.active[a / dirs_]]), a % dirs_);
   }
 
-  // A^-1 H^T e per active contact direction e into its column (slot dirs k + d of candidate k).
-  template <class Solve>
-  bool compute_columns(const ContactSetT<D>& cs, int m, const Solve& solve, long factor_id) {
-    active_columns_.clear();
+  // G is emptied: a new factor (or none, on the CG path) makes every entry stale.
+  void forget_nodes(long factor_id) {
+    for (int node : cached_nodes_) {
+      const int cp = node_cache_[node];
+      for (int x = 0; x < D; ++x) pool_index_[D * cp + x] = -1;
+      node_cache_[node] = -1;
+    }
+    cached_nodes_.clear();
+    pool_used_ = 0;
+    cache_factor_ = factor_id;
+  }
+
+  // The response y = A^-1 dt H^T R as the sum of the kept columns, sum_s w_s A^-1 E_p u_s with
+  // w_s = dt sum over the active directions a and their stencil nodes j of r_a coef_j (u_s . d_a),
+  // when every column it needs is in the pool (n x m flops instead of a solve); false otherwise.
+  bool response_from_pool(const ContactSetT<D>& cs, double dt) {
+    touched_.clear();
+    const int m = static_cast<int>(active_directions_.size());
     for (int a = 0; a < m; ++a) {
-      const int slot = dirs_ * cs.active[a / dirs_] + a % dirs_;
-      active_columns_.push_back(slot);
-      const Stencil& st = cs.stencil[cs.active[a / dirs_]];
-      const Vec d = direction(cs, a);
-      if (factor_id >= 0 && column_factor_[slot] == factor_id && column_direction_[slot] == d &&
-          same_stencil(column_stencil_[slot], st))
-        continue;
-      rhs_.setZero();
-      for (int j = 0; j < st.count; ++j) rhs_.template segment<D>(D * st.node[j]) += st.coef[j] * d;
-      y_.setZero();
-      if (!solve(rhs_, y_)) return false;
-      columns_.col(slot) = y_;
-      column_factor_[slot] = factor_id;
-      column_direction_[slot] = d;
-      column_stencil_[slot] = st;
+      const int k = cs.active[a / dirs_];
+      const double r = dt * component(cs.reaction[k], a % dirs_);
+      if (r == 0.0) continue;
+      const Stencil& st = cs.stencil[k];
+      for (int j = 0; j < st.count; ++j) {
+        const int cp = node_cache_[st.node[j]];
+        for (int x = 0; x < rank_[cp]; ++x) {
+          const int slot = D * cp + x;
+          if (pool_index_[slot] < 0) {
+            for (int t : touched_) {
+              slot_weight_[t] = 0.0;
+              touched_flag_[t] = 0;
+            }
+            return false;
+          }
+          if (!touched_flag_[slot]) {
+            touched_flag_[slot] = 1;
+            touched_.push_back(slot);
+          }
+          slot_weight_[slot] += r * st.coef[j] * basis_[cp].col(x).dot(active_directions_[a]);
+        }
+      }
+    }
+    y_.setZero();
+    for (int slot : touched_) {
+      y_.noalias() += slot_weight_[slot] * pool_.col(pool_index_[slot]);
+      slot_weight_[slot] = 0.0;
+      touched_flag_[slot] = 0;
+    }
+    return true;
+  }
+
+  // d's coordinates in node p's basis (the first rank entries).
+  void coords(int p, const Vec& d, Vec& out) const { out = basis_[node_cache_[p]].transpose() * d; }
+
+  // Node p is asked for direction d (a unit vector). Its basis is either d alone (rank 1: a
+  // frictionless contact along a fixed normal needs no more) or, once a direction not parallel
+  // to it to round-off is asked, completed to an orthonormal basis of all D directions; the new
+  // vectors wait in pending_ for their columns A^-1 E_p u.
+  void ask(int p, const Vec& d) {
+    int cp = node_cache_[p];
+    if (cp < 0) {
+      cp = static_cast<int>(cached_nodes_.size());
+      node_cache_[p] = cp;
+      cached_nodes_.push_back(p);
+      basis_[cp].setZero();
+      basis_[cp].col(0) = d.normalized();
+      rank_[cp] = 1;
+      pending_.push_back(D * cp);
+      return;
+    }
+    if (rank_[cp] == D) return;
+    const Vec b0 = basis_[cp].col(0);
+    Vec u = d - b0.dot(d) * b0;
+    u -= b0.dot(u) * b0;  // twice, for orthogonality to round-off
+    if (!(u.norm() > kParallelTolerance * d.norm())) return;
+    if constexpr (D == 2) {
+      basis_[cp].col(1) = Vec(-b0.y(), b0.x());
+    } else {
+      const Vec b1 = u.normalized();
+      basis_[cp].col(1) = b1;
+      basis_[cp].col(2) = b0.cross(b1);
+    }
+    rank_[cp] = D;
+    for (int k = 1; k < D; ++k) pending_.push_back(D * cp + k);
+  }
+
+  // The columns of the pending basis vectors, up to kMaxBlock per solve, and their entries of G
+  // with every kept (node, basis vector) pair: G(t, s) = u_t . (A^-1 E_p u_s) at t's node, and
+  // G(s, t) the same (A is symmetric).
+  template <class SolveBlock>
+  bool solve_pending(const SolveBlock& solve_block) {
+    for (std::size_t first = 0; first < pending_.size(); first += kMaxBlock) {
+      const int ncol = static_cast<int>(std::min<std::size_t>(kMaxBlock, pending_.size() - first));
+      for (int k = 0; k < ncol; ++k) {
+        const int s = pending_[first + k];
+        unit_.col(k).setZero();
+        unit_.col(k).template segment<D>(D * cached_nodes_[s / D]) = basis_[s / D].col(s % D);
+      }
+      if (!solve_block(unit_.data(), unit_response_.data(), ncol)) return false;
+      for (int k = 0; k < ncol; ++k) {
+        const int s = pending_[first + k];
+        const auto column = unit_response_.col(k);
+        if (pool_used_ < pool_.cols()) {
+          pool_index_[s] = pool_used_;
+          pool_.col(pool_used_++) = column;
+        }
+        for (int cq = 0; cq < static_cast<int>(cached_nodes_.size()); ++cq) {
+          const Vec yq = column.template segment<D>(D * cached_nodes_[cq]);
+          for (int y = 0; y < rank_[cq]; ++y) {
+            const int t = D * cq + y;
+            g_(t, s) = g_(s, t) = basis_[cq].col(y).dot(yq);
+          }
+        }
+      }
     }
     return true;
   }
@@ -261,16 +404,30 @@ class CondensedContact {
   int dirs_ = 1;
   std::vector<Local> x_free_;
   std::vector<double> weight_;
-  // A^-1 H^T e per candidate k and direction d in column dirs k + d; on the direct path a column
-  // is reused while the factor, the candidate's stencil and its direction are those it was
-  // computed with.
-  Eigen::MatrixXd columns_;
-  std::vector<long> column_factor_;  // factor_id of each column, -1: none
-  std::vector<Vec, Eigen::aligned_allocator<Vec>> column_direction_;
-  std::vector<Stencil> column_stencil_;
-  std::vector<int> active_columns_;  // column of each active contact direction
-  Eigen::MatrixXd w_;                // condensed compliance (m x m)
-  Eigen::VectorXd r_vec_;            // dt R per active contact direction
+  std::vector<Vec, Eigen::aligned_allocator<Vec>> active_directions_;  // per active direction
+  Eigen::MatrixXd w_;  // condensed compliance (m x m)
+  // G: node_cache_[p] is node p's index in the cache (-1: not kept with this factor);
+  // cached_nodes_ the kept nodes in that order; basis_[i] the orthonormal directions of kept node
+  // i (its first rank_[i] columns); G(D i + x, D j + y) = u_ix^T E_(node i)^T A^-1 E_(node j) u_jy.
+  static constexpr double kParallelTolerance = 1e-13;  // |d - (d.b) b| below this x |d|: d is b
+  static constexpr int kMaxBlock = 4;             // columns per solve
+  std::vector<int> node_cache_;
+  std::vector<int> cached_nodes_;
+  std::vector<Eigen::Matrix<double, D, D>, Eigen::aligned_allocator<Eigen::Matrix<double, D, D>>> basis_;
+  std::vector<int> rank_;
+  std::vector<int> pending_;  // G indices D i + x waiting for their column
+  long cache_factor_ = -1;
+  Eigen::MatrixXd g_;
+  Eigen::Matrix<double, Eigen::Dynamic, kMaxBlock> unit_, unit_response_;  // E_p u and A^-1 E_p u
+  // The columns A^-1 E_p u kept for the response (response_from_pool): pool_index_[D i + x] its
+  // column in pool_ (-1: none); the pool's width is reserve()'s pool_columns.
+  Eigen::MatrixXd pool_;
+  std::vector<int> pool_index_;
+  int pool_used_ = 0;
+  std::vector<double> slot_weight_;  // w_s of response_from_pool, 0 outside it
+  std::vector<int> touched_;
+  std::vector<unsigned char> touched_flag_;
+  std::array<Vec, std::tuple_size_v<decltype(Stencil::node)>> coord_a_;  // row contact's coordinates per stencil node
   Eigen::VectorXd impulse_, y_, rhs_;
   int sweeps_ = 0;
   bool converged_ = true;

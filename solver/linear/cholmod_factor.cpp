@@ -148,10 +148,9 @@ CholmodFactor::CholmodFactor() {
   common_ = new cholmod_common;
   cholmod_start(common_);
   common_->print = 0;  // a non-positive-definite matrix is an expected outcome, not a message
-  // One ordering, AMD: deterministic, and on 2D meshes as good as the nested dissection that
-  // CHOLMOD would also try (nmethods = 0) at several times the analysis cost.
+  // One ordering, the one analyze() is given: deterministic (CHOLMOD's default would try
+  // several and keep the one of least fill).
   common_->nmethods = 1;
-  common_->method[0].ordering = CHOLMOD_AMD;
   common_->postorder = 1;
 }
 
@@ -163,11 +162,11 @@ CholmodFactor::~CholmodFactor() {
 
 void CholmodFactor::release() {
   if (factor_) cholmod_free_factor(&factor_, common_);
-  for (cholmod_dense** d : {&x_, &y_, &e_})
+  for (cholmod_dense** d : {&x_, &y_, &e_, &xb_, &yb_, &eb_})
     if (*d) cholmod_free_dense(d, common_);
 }
 
-void CholmodFactor::analyze(const RowMajor& a, Method method) {
+void CholmodFactor::analyze(const RowMajor& a, Method method, Ordering ordering) {
   if (a.rows() != a.cols() || !a.isCompressed())
     throw std::invalid_argument("CholmodFactor::analyze: needs a square compressed matrix");
   release();
@@ -175,6 +174,9 @@ void CholmodFactor::analyze(const RowMajor& a, Method method) {
   nnz_ = a.nonZeros();
   outer_ = a.outerIndexPtr();
   inner_ = a.innerIndexPtr();
+  common_->method[0].ordering = ordering == Ordering::amd     ? CHOLMOD_AMD
+                                : ordering == Ordering::metis ? CHOLMOD_METIS
+                                                              : CHOLMOD_NESDIS;
   common_->supernodal = method == Method::supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
   // Simplicial: keep L D L^T (no square roots); supernodal is L L^T by construction.
   common_->final_ll = 0;
@@ -191,6 +193,10 @@ void CholmodFactor::analyze(const RowMajor& a, Method method) {
   if (!factorize(identity.data())) throw std::runtime_error("CHOLMOD warm-up factorization failed");
   Eigen::VectorXd b = Eigen::VectorXd::Ones(n_), x(n_);
   solve(b, x);
+  // The block solves of the implicit contact problem (1 to kMaxBlock columns): each size once,
+  // so that the recycling allocator holds the blocks of all of them.
+  std::vector<double> bb(kMaxBlock * static_cast<std::size_t>(n_), 1.0), xb(bb.size());
+  for (int ncol = kMaxBlock; ncol >= 1; --ncol) solve_block(bb.data(), xb.data(), ncol);
 }
 
 bool CholmodFactor::factorize(const double* a_values) {
@@ -222,6 +228,21 @@ void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &x_, nullptr, &y_, &e_, common_))
     throw std::runtime_error("CHOLMOD solve failed (status " + std::to_string(common_->status) + ")");
   x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(x_->x), n_);
+}
+
+void CholmodFactor::solve_block(const double* b, double* x, int ncol) {
+  if (ncol < 1 || ncol > kMaxBlock) throw std::invalid_argument("CholmodFactor::solve_block: ncol out of range");
+  cholmod_dense rhs{};
+  rhs.nrow = static_cast<std::size_t>(n_);
+  rhs.ncol = static_cast<std::size_t>(ncol);
+  rhs.nzmax = static_cast<std::size_t>(n_) * static_cast<std::size_t>(ncol);
+  rhs.d = static_cast<std::size_t>(n_);
+  rhs.x = const_cast<double*>(b);
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &xb_, nullptr, &yb_, &eb_, common_))
+    throw std::runtime_error("CHOLMOD solve failed (status " + std::to_string(common_->status) + ")");
+  std::memcpy(x, xb_->x, sizeof(double) * static_cast<std::size_t>(n_) * static_cast<std::size_t>(ncol));
 }
 
 double CholmodFactor::factor_nonzeros() const { return common_->lnz; }

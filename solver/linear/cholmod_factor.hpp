@@ -46,6 +46,13 @@ class CholmodFactor {
     simplicial,  // L D L^T column by column, no BLAS
   };
 
+  // The fill-reducing ordering of analyze() (docs/implicit.md, "The linear solver"):
+  enum class Ordering {
+    amd,     // approximate minimum degree: cheapest analysis, most fill on large 2D/3D meshes
+    metis,   // METIS nested dissection (METIS_NodeND): least fill on meshes of some thousands of nodes up
+    nesdis,  // CHOLMOD's own nested dissection (METIS edge separators, constrained minimum degree)
+  };
+
   CholmodFactor();
   ~CholmodFactor();
   CholmodFactor(const CholmodFactor&) = delete;
@@ -54,7 +61,7 @@ class CholmodFactor {
   // Symbolic analysis of the pattern of `a` (square, symmetric, both triangles stored,
   // compressed; the pattern must not change afterwards, its values are read by factorize).
   // Allocates. Replaces any previous analysis.
-  void analyze(const RowMajor& a, Method method = Method::simplicial);
+  void analyze(const RowMajor& a, Method method = Method::simplicial, Ordering ordering = Ordering::amd);
 
   // Numeric factorization of the matrix with a's pattern and the values a_values[0 .. nnz)
   // (same layout as a.valuePtr()). Returns false if it is not positive definite (a pivot not
@@ -63,6 +70,11 @@ class CholmodFactor {
 
   // x = A^-1 b with the last successful factorization (size n). x and b may be the same vector.
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  // X = A^-1 B for ncol right-hand sides at once (column-major n x ncol arrays, 1 <= ncol <=
+  // kMaxBlock; CHOLMOD solves up to four columns in one sweep over L). Allocates nothing (every
+  // width is warmed up by analyze()).
+  static constexpr int kMaxBlock = 4;
+  void solve_block(const double* b, double* x, int ncol);
 
   int size() const { return n_; }
   bool analyzed() const { return factor_ != nullptr; }
@@ -77,6 +89,9 @@ class CholmodFactor {
   cholmod_dense_struct* x_ = nullptr;  // solve2's solution and workspaces, reused
   cholmod_dense_struct* y_ = nullptr;
   cholmod_dense_struct* e_ = nullptr;
+  cholmod_dense_struct* xb_ = nullptr;  // the same for solve_block
+  cholmod_dense_struct* yb_ = nullptr;
+  cholmod_dense_struct* eb_ = nullptr;
   int n_ = 0;
   long nnz_ = 0;
   const int* outer_ = nullptr;  // the analysed matrix's arrays (read by factorize)

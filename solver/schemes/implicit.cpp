@@ -1,6 +1,7 @@
 #include "solver/schemes/implicit.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -45,6 +46,19 @@ inline double node_diagonal(const Eigen::VectorXd& inv_diag, int node, std::inte
   return (1.0 / inv_diag[3 * node] + 1.0 / inv_diag[3 * node + 1] + 1.0 / inv_diag[3 * node + 2]) / 3.0;
 }
 
+// Adds the wall time of its scope to a phase's seconds (ImplicitPhases).
+class PhaseTimer {
+ public:
+  explicit PhaseTimer(double& seconds) : seconds_(seconds), start_(std::chrono::steady_clock::now()) {}
+  ~PhaseTimer() { seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  PhaseTimer(const PhaseTimer&) = delete;
+  PhaseTimer& operator=(const PhaseTimer&) = delete;
+
+ private:
+  double& seconds_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 }  // namespace
 
 template <class M>
@@ -56,7 +70,11 @@ ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& r
       system_(make_system_matrix(model), model.mass, run.prescribed, settings) {
   s_ = initial_state(model, run.prescribed, run.dt, run.initial_displacement, run.loads);
   contact_ = make_contact_set(model, obstacles_, run.friction, run.prescribed, run.body_pairs);
-  condensed_.reserve(contact_, model.num_dofs());
+  // The contact problem keeps as many response columns as the factor has nonzeros per row (at
+  // least twice A's), so that they take no more memory than the factor.
+  const int n_dofs = model.num_dofs();
+  const double per_row = std::max(system_.factor_nonzeros(), 2.0 * system_.matrix().matrix.nonZeros()) / n_dofs;
+  condensed_.reserve(contact_, n_dofs, static_cast<int>(per_row));
   engaged_.assign(contact_.candidates.size(), 0);
   force_roundoff_ = internal_force_roundoff(model);
   const int n = model.num_dofs();
@@ -75,6 +93,7 @@ double ImplicitIntegratorT<M>::load_average(const NodalLoad& l) const {
 
 template <class M>
 bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  PhaseTimer timer(phases_.solve);
   if (system_.solve(b, x)) return true;
   failure_ = system_.failure();
   return false;
@@ -82,6 +101,7 @@ bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x)
 
 template <class M>
 double ImplicitIntegratorT<M>::residual(bool with_energy) {
+  PhaseTimer timer(phases_.residual);
   const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
   s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
@@ -175,9 +195,16 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   // contact.max_sweeps leaves its last iterate: the step goes on and is counted in
   // unconverged_steps. Only a failed linear solve stops the run.
   auto solve_a = [this](const Eigen::VectorXd& b, Eigen::VectorXd& x) { return solve(b, x); };
+  auto solve_block = [this](const double* b, double* x, int ncol) {
+    PhaseTimer timer(phases_.solve);
+    if (system_.solve_block(b, x, ncol)) return true;
+    failure_ = system_.failure();
+    return false;
+  };
   const double tol = run_.contact.tolerance;
   if (!system_.direct() && condensed_.uzawa(cs, c, dt, set_.uzawa_sweeps, tol, solve_a)) return true;
-  if (!condensed_.exact(cs, c, dt, run_.contact.max_sweeps, tol, solve_a, system_.direct() ? system_.factor_id() : -1))
+  if (!condensed_.exact(cs, c, dt, run_.contact.max_sweeps, tol, solve_a, solve_block,
+                        system_.direct() ? system_.factor_id() : -1))
     return false;
   if (!condensed_.converged()) step_unconverged_ = true;
   return true;
@@ -268,8 +295,12 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     // The direct path reuses the factor of an earlier iterate (modified Newton) unless the rule
     // below asked for a new one; PCG needs the current A every iteration.
     if (system_.needs_matrix()) {
-      assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_.matrix(), f1_.data(),
-                      false);
+      {
+        PhaseTimer timer(phases_.assembly);
+        assemble_system(model_, u1_.data(), v1_.data(), 1.0, th * xi * dt * dt, xi * dt, system_.matrix(),
+                        f1_.data(), false);
+      }
+      PhaseTimer timer(phases_.factorization);
       if (!system_.prepare()) {
         failure_ = system_.failure();
         return false;
@@ -281,7 +312,15 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     dv_free_.setZero();
     if (!solve(rhs_, dv_free_)) return false;
     if (!contact_.candidates.empty()) {
-      if (!solve_contact()) return false;
+      // The contact problem's own time: its wall time less that of the solves it makes.
+      const double solve_before = phases_.solve;
+      bool solved;
+      {
+        PhaseTimer timer(phases_.contact);
+        solved = solve_contact();
+      }
+      phases_.contact -= phases_.solve - solve_before;
+      if (!solved) return false;
       sweeps = std::max(sweeps, condensed_.sweeps());
       dv_free_ += condensed_.response();
     }
@@ -295,7 +334,7 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
       if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
       alpha *= 0.5;
     }
-    system_.end_iteration(r, r_before, alpha);  // the refactorization rule (implicit_system.hpp)
+    system_.end_iteration(r, r_before, alpha, it + 1);  // the refactorization rule (implicit_system.hpp)
   }
   return true;
 }
@@ -394,6 +433,13 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   result.implicit.linear_iterations = integrator.linear_iterations_total();
   result.implicit.direct_solver = integrator.direct_solver();
   result.implicit.factorizations = integrator.factorizations();
+  result.implicit.refactor_iterations = integrator.refactor_iterations();
+  const ImplicitPhases& ph = integrator.phases();
+  result.implicit.assembly_seconds = ph.assembly;
+  result.implicit.factorization_seconds = ph.factorization;
+  result.implicit.solve_seconds = ph.solve;
+  result.implicit.contact_seconds = ph.contact;
+  result.implicit.residual_seconds = ph.residual;
   return result;
 }
 

@@ -23,6 +23,11 @@
 
 namespace ricochet {
 
+// Wall time of the scheme's phases [s] (RunImplicit's *_seconds).
+struct ImplicitPhases {
+  double assembly = 0.0, factorization = 0.0, solve = 0.0, contact = 0.0, residual = 0.0;
+};
+
 template <class M>
 class ImplicitIntegratorT {
  public:
@@ -48,6 +53,8 @@ class ImplicitIntegratorT {
   long linear_iterations_total() const { return system_.cg_iterations(); }
   bool direct_solver() const { return system_.direct(); }
   long factorizations() const { return system_.factorizations(); }
+  int refactor_iterations() const { return system_.direct() ? system_.refactor_iterations() : 0; }
+  const ImplicitPhases& phases() const { return phases_; }
   long exact_contact_solves() const { return condensed_.exact_solves(); }
   long shifted_iterations() const { return system_.shifted_factorizations(); }
 
@@ -76,6 +83,7 @@ class ImplicitIntegratorT {
   double scale_ = 0.0;  // largest momentum scale of the residual so far
   double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
   long newton_total_ = 0;
+  ImplicitPhases phases_;
   bool step_unconverged_ = false;  // a contact solve of this step reached contact.max_sweeps
 };
 

@@ -11,6 +11,8 @@ ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
   const int n = static_cast<int>(mass.size());
   pcg_.resize(n);
   inv_diag_.setZero(n);
+  column_b_.setZero(n);
+  column_x_.setZero(n);
   fixed_.assign(n, 0);
   for (const auto& p : prescribed) fixed_[p.dof] = 1;
   const SparseMatrixR& A = system_.matrix;
@@ -25,9 +27,18 @@ ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
   if (set_.linear_solver != LinearSolverKind::pcg) use_direct();
 }
 
+int auto_refactor_iterations(double flops, double nonzeros) {
+  if (!(nonzeros > 0.0)) return 6;
+  return static_cast<int>(std::max(6.0, std::min(1000.0, std::round(flops / (12.0 * nonzeros)))));
+}
+
 void ImplicitSystem::use_direct() {
   direct_ = true;
   factor_.analyze(system_.matrix);
+  refactor_iterations_ = set_.refactor_iterations > 0
+                             ? set_.refactor_iterations
+                             : auto_refactor_iterations(factor_.factor_flops(), factor_.factor_nonzeros());
+  factor_cost_ = factor_.factor_nonzeros() > 0.0 ? factor_.factor_flops() / (8.0 * factor_.factor_nonzeros()) : 0.0;
   a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
   refactor_next_ = true;
 }
@@ -92,11 +103,33 @@ bool ImplicitSystem::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   return true;
 }
 
-void ImplicitSystem::end_iteration(double r, double r_before, double alpha) {
+bool ImplicitSystem::solve_block(const double* b, double* x, int ncol) {
+  const Eigen::Index n = inv_diag_.size();
+  if (direct_) {
+    factor_.solve_block(b, x, ncol);
+    return true;
+  }
+  for (int k = 0; k < ncol; ++k) {
+    column_b_ = Eigen::Map<const Eigen::VectorXd>(b + k * n, n);
+    column_x_.setZero();
+    if (!solve(column_b_, column_x_)) return false;
+    Eigen::Map<Eigen::VectorXd>(x + k * n, n) = column_x_;
+  }
+  return true;
+}
+
+void ImplicitSystem::end_iteration(double r, double r_before, double alpha, int iteration) {
   // Counting converged steps too refactorized M2 at 1e-5 100 times instead of 35 (docs/implicit.md).
-  if (direct_ && !(r <= set_.newton_tolerance) &&
-      (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 || iterations_on_factor_ >= set_.refactor_iterations))
+  if (!direct_ || r <= set_.newton_tolerance) return;
+  if (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 || iterations_on_factor_ >= refactor_iterations_) {
     refactor_next_ = true;
+    return;
+  }
+  if (set_.refactor_iterations > 0) return;  // a cap the case set: the rule above alone
+  const double rate = r / r_before;
+  if (!(rate > 0.0 && rate < 1.0)) return;
+  const double remaining = std::log(set_.newton_tolerance / r) / std::log(rate);
+  if (iteration + remaining > set_.max_newton_iterations - 2) refactor_next_ = true;
 }
 
 }  // namespace ricochet

@@ -44,10 +44,20 @@ struct ImplicitSettings {
   // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
   // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
   // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
-  // first of each step.
+  // first of each step; refactor_iterations = 0 (automatic) sets it from the factorization's
+  // cost (auto_refactor_iterations).
   double refactor_contraction = 0.5;  // [0, 1)
-  int refactor_iterations = 6;        // >= 1
+  int refactor_iterations = 0;        // >= 0; 0: automatic
 };
+
+// The automatic refactor_iterations of a factor with `flops` floating-point operations per
+// factorization and `nonzeros` entries (docs/implicit.md, "Modified Newton"): a Newton
+// iteration on a kept factor costs about two solves, 2 x 4 nnz(L) operations, so a
+// factorization costs F/S = flops / (8 nnz(L)) of them, and a step may spend two thirds of that
+// on the old factor before a new one pays: max(6, round(flops / (12 nnz(L)))). 6 is the cap
+// measured best on M2 (where the ratio gives 6); it grows with the mesh (10 on M2x2, 18 on
+// M2x4), where a factorization costs more iterations.
+int auto_refactor_iterations(double flops, double nonzeros);
 
 class ImplicitSystem {
  public:
@@ -67,17 +77,29 @@ class ImplicitSystem {
   // x = A^-1 b, by the factor or by CG from x. False (failure()) when CG fails and pcg was asked
   // for by name, or the fallback's factorization fails.
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  // X = A^-1 B for the ncol (2 or 3) columns of B (n x ncol, column-major): one sweep over the
+  // factor for all of them, or one CG solve each (from zero). False as solve().
+  bool solve_block(const double* b, double* x, int ncol);
   // The bookkeeping of the refactorization rule: a step starts with no iteration on the factor,
   void begin_step() { iterations_on_factor_ = 0; }
   // each Newton iteration counts one,
   void count_iteration() { ++iterations_on_factor_; }
   // and an iteration that left the residual r (from r_before; line-search factor alpha) above the
   // tolerance asks for a new factor when it contracted too little, needed a line search, or was
-  // the refactor_iterations-th on this factor. A step that converges keeps the factor.
-  void end_iteration(double r, double r_before, double alpha);
+  // the refactor_iterations-th on this factor. With the automatic cap (refactor_iterations = 0)
+  // it also asks for one when the iterations still needed at the rate just seen, log(tol / r) /
+  // log(r / r_before), would take the step (`iteration` Newton iterations so far) to within two
+  // of max_newton_iterations, or would cost more than a factorization (factor_cost()). A step
+  // that converges keeps the factor.
+  void end_iteration(double r, double r_before, double alpha, int iteration);
 
   bool direct() const { return direct_; }
   long factor_id() const { return factor_id_; }  // increases with every factorization
+  int refactor_iterations() const { return refactor_iterations_; }  // in effect (0 resolved)
+  // A factorization's cost in Newton iterations on a kept factor, flops / (8 nnz(L)) (two solves
+  // of 4 nnz(L) operations an iteration), from CHOLMOD's counts of the analysis; 0 without one.
+  double factor_cost() const { return factor_cost_; }
+  double factor_nonzeros() const { return direct_ ? factor_.factor_nonzeros() : 0.0; }  // entries of L
   const Eigen::VectorXd& inverse_diagonal() const { return inv_diag_; }  // 1 / diag(A) as solved
   long factorizations() const { return factorizations_; }
   long shifted_factorizations() const { return shifted_; }  // factorizations that needed a shift
@@ -97,11 +119,14 @@ class ImplicitSystem {
   long factor_id_ = 0;
   bool refactor_next_ = true;     // the next Newton iteration assembles and factorizes A
   int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
+  int refactor_iterations_ = 0;   // set_.refactor_iterations, or the automatic one
+  double factor_cost_ = 0.0;      // factor_cost()
   long factorizations_ = 0;
   long shifted_ = 0;
   long cg_iterations_ = 0;
   std::vector<double> a_values_;  // the values of A as factorized (with the shift, if any)
   Eigen::VectorXd inv_diag_;
+  Eigen::VectorXd column_b_, column_x_;  // one column of solve_block on the CG path
   std::vector<unsigned char> fixed_;       // per DOF: prescribed
   std::vector<int> constrained_entries_;   // value positions of prescribed rows and columns
   std::vector<int> constrained_diagonal_;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <sys/resource.h>
+
 #include "solver/forces/internal_forces.hpp"
 #include "solver/observers/observers.hpp"
 
@@ -508,6 +510,8 @@ template <class M>
 void RunMonitorT<M>::finish(const State& s) {
   result_.timing.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   result_.timing.cpu_seconds = static_cast<double>(std::clock() - cpu0_) / CLOCKS_PER_SEC;
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) == 0) result_.timing.peak_memory_bytes = 1024.0 * static_cast<double>(usage.ru_maxrss);
   result_.steps = s.step;
   result_.end_time = s.time;
   if (result_.timing.wall_seconds > 0.0)

@@ -179,6 +179,9 @@ struct RunTiming {
   double wall_seconds = 0.0;       // time loop only
   double cpu_seconds = 0.0;        // time loop only, process CPU time
   double element_steps_per_second = 0.0;
+  // The process's peak resident memory when the run ended (getrusage's ru_maxrss): the run's own
+  // for `ricochet run`; in a sweep, the largest of the runs so far in that process [bytes].
+  double peak_memory_bytes = 0.0;
 };
 
 // What contact did over the run (summary.json: contact_candidates, contact_impulse,
@@ -217,6 +220,12 @@ struct RunImplicit {
   long linear_iterations = 0;      // CG iterations, all solves
   bool direct_solver = false;      // CHOLMOD Cholesky (true) or PCG (false)
   long factorizations = 0;         // direct solver: numeric factorizations of A
+  int refactor_iterations = 0;     // direct solver: the refactorization cap in effect (0: none)
+  // Wall time of the scheme's phases over the run [s] (summary.json implicit.phase_seconds):
+  // assembly of A, its factorizations (with the shifts), linear solves (those of the contact
+  // problem included), the contact problem less its solves, and the residual's force passes.
+  double assembly_seconds = 0.0, factorization_seconds = 0.0, solve_seconds = 0.0, contact_seconds = 0.0,
+         residual_seconds = 0.0;
 };
 
 // What a run returns: its status and steps, its outcome (energy, penetration, work, drift), its

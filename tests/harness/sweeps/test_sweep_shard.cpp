@@ -85,9 +85,13 @@ kind = "count"
 min = 13
 )";
 
-// The columns that differ between two runs of the same case: timings and when it was written.
+// The columns that differ between two runs of the same case: timings, memory and when it was
+// written.
 const std::set<std::string> kTimingColumns = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
-                                              "wall_seconds_min", "wall_seconds_max", "written_at"};
+                                              "wall_seconds_min", "wall_seconds_max", "written_at",
+                                              "peak_memory_bytes", "implicit.phase_seconds.assembly",
+                                              "implicit.phase_seconds.factorization", "implicit.phase_seconds.solve",
+                                              "implicit.phase_seconds.contact", "implicit.phase_seconds.residual"};
 
 using test_support::text_of;
 

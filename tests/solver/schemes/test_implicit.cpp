@@ -402,6 +402,28 @@ TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
   }
 }
 
+TEST(Implicit, AutomaticRefactorCapFollowsTheFactorCost) {
+  // max(6, round(flops / (12 nnz(L)))): CHOLMOD's counts of the oblique plate's M2 and M2x2
+  // factors (docs/implicit.md) give 6 and 10; the cap stays within [6, 1000].
+  EXPECT_EQ(auto_refactor_iterations(2.26e7, 315160.0), 6);
+  EXPECT_EQ(auto_refactor_iterations(1.84e8, 1581361.0), 10);
+  EXPECT_EQ(auto_refactor_iterations(0.0, 0.0), 6);
+  EXPECT_EQ(auto_refactor_iterations(1e15, 10.0), 1000);
+  // A run reports the cap in effect: the automatic one by default, the case's when it sets one,
+  // none with PCG.
+  const Model<2> model = vibrating_slab(1.0, 0.2);
+  RunSettings s;
+  s.dt = model.critical_dt;
+  s.end_time = 5 * s.dt;
+  ImplicitSettings im;
+  im.linear_solver = LinearSolverKind::direct;
+  EXPECT_GE(run_implicit(model, s, im).implicit.refactor_iterations, 6);
+  im.refactor_iterations = 3;
+  EXPECT_EQ(run_implicit(model, s, im).implicit.refactor_iterations, 3);
+  im.linear_solver = LinearSolverKind::pcg;
+  EXPECT_EQ(run_implicit(model, s, im).implicit.refactor_iterations, 0);
+}
+
 TEST(Implicit, FreeFallUnderGravity) {
   // A free body with a uniform initial velocity v0 under gravity g: the exact discrete solution
   // is rigid, with v_n = v0 + g t_n for any theta, and u_{n+1} = u_n + dt (v0 + g t_n +
