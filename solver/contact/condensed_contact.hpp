@@ -165,26 +165,25 @@ class CondensedContact {
     converged_ = false;
     if (factor_id < 0 || factor_id != cache_factor_) forget_nodes(factor_id);
     pending_.clear();
+    active_directions_.clear();
     for (int a = 0; a < m; ++a) {
-      const Vec d = direction(cs, a);
+      active_directions_.push_back(direction(cs, a));
       const Stencil& st = cs.stencil[cs.active[a / dirs_]];
-      for (int j = 0; j < st.count; ++j) ask(st.node[j], d);
+      for (int j = 0; j < st.count; ++j) ask(st.node[j], active_directions_[a]);
     }
     if (!solve_pending(solve_block)) return false;
-    active_directions_.clear();
-    for (int a = 0; a < m; ++a) active_directions_.push_back(direction(cs, a));
     // W(a, b) = c dt sum_i sum_j coef_i coef_j (d_a . u) (d_b . v) G(u of node i, v of node j).
     const double cdt = c * dt;
     for (int a = 0; a < m; ++a) {
       const Stencil& sa = cs.stencil[cs.active[a / dirs_]];
-      for (int i = 0; i < sa.count; ++i) coords(sa.node[i], active_directions_[a], coord_a_[i]);
+      for (int i = 0; i < sa.count; ++i) coord_a_[i] = coords(sa.node[i], active_directions_[a]);
       for (int b = 0; b <= a; ++b) {
         const Stencil& sb = cs.stencil[cs.active[b / dirs_]];
         double h = 0.0;
         for (int j = 0; j < sb.count; ++j) {
           const int q = sb.node[j];
           const int bq = D * node_cache_[q];
-          const Vec cb = basis_[node_cache_[q]].transpose() * active_directions_[b];
+          const Vec cb = coords(q, active_directions_[b]);
           for (int i = 0; i < sa.count; ++i) {
             const int bp = D * node_cache_[sa.node[i]];
             double e = 0.0;
@@ -296,8 +295,8 @@ class CondensedContact {
     return true;
   }
 
-  // d's coordinates in node p's basis (the first rank entries).
-  void coords(int p, const Vec& d, Vec& out) const { out = basis_[node_cache_[p]].transpose() * d; }
+  // d's coordinates in node p's basis (the first rank entries; the others 0).
+  Vec coords(int p, const Vec& d) const { return basis_[node_cache_[p]].transpose() * d; }
 
   // Node p is asked for direction d (a unit vector). Its basis is either d alone (rank 1: a
   // frictionless contact along a fixed normal needs no more) or, once a direction not parallel

@@ -72,12 +72,11 @@ ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& r
   contact_ = make_contact_set(model, obstacles_, run.friction, run.prescribed, run.body_pairs);
   // The contact problem keeps as many response columns as the factor has nonzeros per row (at
   // least twice A's), so that they take no more memory than the factor.
-  const int n_dofs = model.num_dofs();
-  const double per_row = std::max(system_.factor_nonzeros(), 2.0 * system_.matrix().matrix.nonZeros()) / n_dofs;
-  condensed_.reserve(contact_, n_dofs, static_cast<int>(per_row));
+  const int n = model.num_dofs();
+  const double per_row = std::max(system_.factor_nonzeros(), 2.0 * system_.matrix().matrix.nonZeros()) / n;
+  condensed_.reserve(contact_, n, static_cast<int>(per_row));
   engaged_.assign(contact_.candidates.size(), 0);
   force_roundoff_ = internal_force_roundoff(model);
-  const int n = model.num_dofs();
   for (Eigen::VectorXd* v : {&v_prev_, &v_base_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
                              &prescribed_v_})
     v->setZero(n);

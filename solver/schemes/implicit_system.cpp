@@ -38,7 +38,6 @@ void ImplicitSystem::use_direct() {
   refactor_iterations_ = set_.refactor_iterations > 0
                              ? set_.refactor_iterations
                              : auto_refactor_iterations(factor_.factor_flops(), factor_.factor_nonzeros());
-  factor_cost_ = factor_.factor_nonzeros() > 0.0 ? factor_.factor_flops() / (8.0 * factor_.factor_nonzeros()) : 0.0;
   a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
   refactor_next_ = true;
 }

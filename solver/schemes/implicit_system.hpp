@@ -77,8 +77,9 @@ class ImplicitSystem {
   // x = A^-1 b, by the factor or by CG from x. False (failure()) when CG fails and pcg was asked
   // for by name, or the fallback's factorization fails.
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  // X = A^-1 B for the ncol (2 or 3) columns of B (n x ncol, column-major): one sweep over the
-  // factor for all of them, or one CG solve each (from zero). False as solve().
+  // X = A^-1 B for the ncol (1 to CholmodFactor::kMaxBlock) columns of B (n x ncol,
+  // column-major): one sweep over the factor for all of them, or one CG solve each (from zero).
+  // False as solve().
   bool solve_block(const double* b, double* x, int ncol);
   // The bookkeeping of the refactorization rule: a step starts with no iteration on the factor,
   void begin_step() { iterations_on_factor_ = 0; }
@@ -89,16 +90,12 @@ class ImplicitSystem {
   // the refactor_iterations-th on this factor. With the automatic cap (refactor_iterations = 0)
   // it also asks for one when the iterations still needed at the rate just seen, log(tol / r) /
   // log(r / r_before), would take the step (`iteration` Newton iterations so far) to within two
-  // of max_newton_iterations, or would cost more than a factorization (factor_cost()). A step
-  // that converges keeps the factor.
+  // of max_newton_iterations. A step that converges keeps the factor.
   void end_iteration(double r, double r_before, double alpha, int iteration);
 
   bool direct() const { return direct_; }
   long factor_id() const { return factor_id_; }  // increases with every factorization
   int refactor_iterations() const { return refactor_iterations_; }  // in effect (0 resolved)
-  // A factorization's cost in Newton iterations on a kept factor, flops / (8 nnz(L)) (two solves
-  // of 4 nnz(L) operations an iteration), from CHOLMOD's counts of the analysis; 0 without one.
-  double factor_cost() const { return factor_cost_; }
   double factor_nonzeros() const { return direct_ ? factor_.factor_nonzeros() : 0.0; }  // entries of L
   const Eigen::VectorXd& inverse_diagonal() const { return inv_diag_; }  // 1 / diag(A) as solved
   long factorizations() const { return factorizations_; }
@@ -120,7 +117,6 @@ class ImplicitSystem {
   bool refactor_next_ = true;     // the next Newton iteration assembles and factorizes A
   int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
   int refactor_iterations_ = 0;   // set_.refactor_iterations, or the automatic one
-  double factor_cost_ = 0.0;      // factor_cost()
   long factorizations_ = 0;
   long shifted_ = 0;
   long cg_iterations_ = 0;

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -34,6 +35,15 @@ struct SummaryTable {
     return v;
   }
 };
+
+// The columns that differ between two runs of the same case: the machine's measurements
+// (timings, memory, the implicit scheme's phase times) and when the summary was written.
+inline bool is_measurement_column(const std::string& column) {
+  static const std::set<std::string> measured = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
+                                                 "wall_seconds_min", "wall_seconds_max", "written_at",
+                                                 "peak_memory_bytes"};
+  return measured.count(column) > 0 || column.rfind("implicit.phase_seconds.", 0) == 0;
+}
 
 inline SummaryTable read_summary_table(const std::filesystem::path& path) {
   const CsvTable csv = read_csv(path);

@@ -85,14 +85,6 @@ kind = "count"
 min = 13
 )";
 
-// The columns that differ between two runs of the same case: timings, memory and when it was
-// written.
-const std::set<std::string> kTimingColumns = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
-                                              "wall_seconds_min", "wall_seconds_max", "written_at",
-                                              "peak_memory_bytes", "implicit.phase_seconds.assembly",
-                                              "implicit.phase_seconds.factorization", "implicit.phase_seconds.solve",
-                                              "implicit.phase_seconds.contact", "implicit.phase_seconds.residual"};
-
 using test_support::text_of;
 
 using Table = test_support::SummaryTable;
@@ -107,7 +99,7 @@ void expect_same_table(const fs::path& a, const fs::path& b) {
   std::size_t compared = 0;
   for (std::size_t r = 0; r < x.rows.size(); ++r) {
     for (const std::string& column : x.header) {
-      if (kTimingColumns.count(column)) continue;
+      if (test_support::is_measurement_column(column)) continue;
       EXPECT_EQ(x.cell(r, column), y.cell(r, column)) << x.cell(r, "run_id") << " " << column;
       ++compared;
     }

@@ -28,6 +28,7 @@
 #include "harness/sweeps/sweep_slurm.hpp"
 #include "tests/support/run_program.hpp"
 #include "tests/support/small_cases.hpp"
+#include "tests/support/summary_table.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
@@ -57,14 +58,6 @@ name = "rows"
 kind = "count"
 min = 6
 )";
-
-// The columns that differ between two runs of the same case: timings, memory and when it was
-// written.
-const std::set<std::string> kTimingColumns = {"wall_seconds", "cpu_seconds", "element_steps_per_second",
-                                              "wall_seconds_min", "wall_seconds_max", "written_at",
-                                              "peak_memory_bytes", "implicit.phase_seconds.assembly",
-                                              "implicit.phase_seconds.factorization", "implicit.phase_seconds.solve",
-                                              "implicit.phase_seconds.contact", "implicit.phase_seconds.residual"};
 
 using test_support::text_of;
 
@@ -472,7 +465,7 @@ TEST_F(SweepSlurmTest, TheScriptsRunByHandGiveTheTableOfASweepWithoutShards) {
   std::size_t compared = 0;
   for (std::size_t r = 0; r < a.rows.size(); ++r)
     for (std::size_t c = 0; c < a.columns.size(); ++c) {
-      if (kTimingColumns.count(a.columns[c])) continue;
+      if (test_support::is_measurement_column(a.columns[c])) continue;
       EXPECT_EQ(a.rows[r][c], b.rows[r][c]) << a.rows[r][0] << " " << a.columns[c];
       ++compared;
     }

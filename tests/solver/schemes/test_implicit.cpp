@@ -424,6 +424,64 @@ TEST(Implicit, AutomaticRefactorCapFollowsTheFactorCost) {
   EXPECT_EQ(run_implicit(model, s, im).implicit.refactor_iterations, 0);
 }
 
+TEST(Implicit, AutomaticCapRefactorizesBeforeNewtonRunsOut) {
+  // With the automatic cap, an iteration that contracts slowly enough to use up the step's
+  // Newton iterations asks for a new factor: at r = 1e-3, tolerance 1e-10 and rate 0.45 it still
+  // needs log(1e-7) / log(0.45) = 20.2 iterations, so after iteration 3 (3 + 20.2 > 25 - 2) it
+  // must refactorize, after iteration 1 not (1 + 20.2 < 23). At rate 0.05 it needs 5.4: after
+  // iteration 3, no new factor. A cap the case sets keeps the rules of before: none of these
+  // refactorizes.
+  const Model<2> model = vibrating_slab(1.0, 0.2);
+  for (int cap : {0, 6}) {
+    ImplicitSettings im;
+    im.linear_solver = LinearSolverKind::direct;
+    im.refactor_iterations = cap;
+    im.max_newton_iterations = 25;
+    ImplicitSystem system(make_system_matrix(model), model.mass, {}, im);
+    const double h = model.critical_dt;
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());
+    auto after = [&](double r, double r_before, int iteration) {
+      if (system.needs_matrix()) {
+        assemble_system(model, u.data(), model.initial_velocity.data(), 1.0, 0.25 * h * h, 0.5 * h, system.matrix(),
+                        f.data(), false);
+        EXPECT_TRUE(system.prepare());
+      }
+      EXPECT_FALSE(system.needs_matrix());
+      system.begin_step();
+      system.count_iteration();
+      system.end_iteration(r, r_before, 1.0, iteration);
+      return system.needs_matrix();
+    };
+    SCOPED_TRACE("refactor_iterations = " + std::to_string(cap));
+    EXPECT_FALSE(after(1e-3, 1e-3 / 0.45, 1));
+    EXPECT_EQ(after(1e-3, 1e-3 / 0.45, 3), cap == 0);
+    EXPECT_FALSE(after(1e-3, 1e-3 / 0.05, 3));
+  }
+}
+
+TEST(Implicit, PhaseTimesAndPeakMemoryAreMeasured) {
+  // summary.json's implicit.phase_seconds and peak_memory_bytes: every phase the run goes
+  // through takes time, none more than the run's wall time; the contact problem's share is zero
+  // without contact; the process has some memory.
+  const Model<2> model = vibrating_slab(1.0, 0.2);
+  RunSettings s;
+  s.dt = 2.0 * model.critical_dt;
+  s.end_time = 20 * s.dt;
+  ImplicitSettings im;
+  im.linear_solver = LinearSolverKind::direct;
+  const RunResult r = run_implicit(model, s, im);
+  ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+  const RunImplicit& p = r.implicit;
+  for (double t : {p.assembly_seconds, p.factorization_seconds, p.solve_seconds, p.residual_seconds}) {
+    EXPECT_GT(t, 0.0);
+    EXPECT_LE(t, r.timing.wall_seconds);
+  }
+  EXPECT_LE(p.assembly_seconds + p.factorization_seconds + p.solve_seconds + p.residual_seconds,
+            r.timing.wall_seconds);
+  EXPECT_EQ(p.contact_seconds, 0.0);
+  EXPECT_GT(r.timing.peak_memory_bytes, 1e6);
+}
+
 TEST(Implicit, FreeFallUnderGravity) {
   // A free body with a uniform initial velocity v0 under gravity g: the exact discrete solution
   // is rigid, with v_n = v0 + g t_n for any theta, and u_{n+1} = u_n + dt (v0 + g t_n +
