@@ -10,6 +10,7 @@
 #include "harness/input/case_spec.hpp"
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/run_plan.hpp"
+#include "solver/linear/anderson.hpp"
 #include "harness/input/suggest.hpp"
 #include "harness/input/toml_reader.hpp"
 #include "solver/schemes/threads.hpp"
@@ -571,10 +572,17 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     c.implicit.max_linear_iterations = static_cast<int>(im->integer("max_linear_iterations", 10000, 1, 10'000'000));
     // "ldlt" (the hand-written LDL^T this replaced) still selects the direct solver, so older
     // case files keep their meaning.
-    const std::string solver = im->choice("linear_solver", "auto", {"auto", "pcg", "direct", "ldlt"});
+    const std::string solver = im->choice("linear_solver", "auto", {"auto", "pcg", "direct", "ldlt", "mass"});
     c.implicit.linear_solver = solver == "pcg"                          ? LinearSolverKind::pcg
                                : solver == "direct" || solver == "ldlt" ? LinearSolverKind::direct
+                               : solver == "mass"                       ? LinearSolverKind::mass
                                                                         : LinearSolverKind::automatic;
+    c.implicit.mass_contraction =
+        im->number("mass_contraction", ImplicitSettings{}.mass_contraction, Range{0.0, 1.0, false, true});
+    c.implicit.mass_iterations =
+        static_cast<int>(im->integer("mass_iterations", ImplicitSettings{}.mass_iterations, 1, 1000));
+    c.implicit.mass_anderson_depth = static_cast<int>(
+        im->integer("mass_anderson_depth", ImplicitSettings{}.mass_anderson_depth, 0, AndersonMixer::kMaxDepth));
     c.implicit.uzawa_sweeps = static_cast<int>(im->integer("uzawa_sweeps", 30, 0, 100000));
     c.implicit.refactor_contraction =
         im->number("refactor_contraction", ImplicitSettings{}.refactor_contraction, Range{0.0, 1.0, false, true});

@@ -252,7 +252,10 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     im["newton_iterations"] = r.implicit.newton_iterations;
     im["newton_iterations_per_step"] = r.steps > 0 ? static_cast<double>(r.implicit.newton_iterations) / r.steps : 0.0;
     im["linear_iterations"] = r.implicit.linear_iterations;
-    im["linear_solver"] = r.implicit.direct_solver ? "direct" : "pcg";
+    im["linear_solver"] = r.implicit.mass_solver ? (r.implicit.direct_solver ? "mass+direct" : "mass")
+                          : r.implicit.direct_solver ? "direct"
+                                                     : "pcg";
+    im["mass_iterations"] = r.implicit.mass_iterations;
     im["factorizations"] = r.implicit.factorizations;
     im["refactor_iterations"] = r.implicit.refactor_iterations;
     im["phase_seconds"] = Json{{"assembly", r.implicit.assembly_seconds},

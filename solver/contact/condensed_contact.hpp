@@ -155,11 +155,13 @@ class CondensedContact {
 
   // The exact W and Gauss-Seidel, at most max_sweeps. `solve_block(b, x, ncol)`: x = A^-1 b for
   // ncol (1 to 4) columns. `factor_id`: the identity of the factor the solves use (G computed with
-  // it is reused), or -1 when they have no fixed factor (CG: G is computed anew). False only
-  // when a linear solve fails; whether Gauss-Seidel converged is converged().
+  // it is reused), or -1 when they have no fixed factor (CG: G is computed anew). `cheap_solve`:
+  // a solve costs less than summing the response from kept columns (the mass iteration's
+  // diagonal M), so the response is always one solve. False only when a linear solve fails;
+  // whether Gauss-Seidel converged is converged().
   template <class Solve, class SolveBlock>
   bool exact(ContactSetT<D>& cs, double c, double dt, int max_sweeps, double tol, const Solve& solve,
-             const SolveBlock& solve_block, long factor_id) {
+             const SolveBlock& solve_block, long factor_id, bool cheap_solve = false) {
     const int m = dirs_ * static_cast<int>(cs.active.size());
     ++exact_solves_;
     converged_ = false;
@@ -211,7 +213,7 @@ class CondensedContact {
     }
     sweeps_ = std::min(sweeps_, max_sweeps);
     impulse_of_active(cs);
-    if (response_from_pool(cs, dt)) return true;
+    if (!cheap_solve && response_from_pool(cs, dt)) return true;
     rhs_ = dt * impulse_;
     y_.setZero();
     return solve(rhs_, y_);

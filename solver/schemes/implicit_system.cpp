@@ -6,7 +6,8 @@
 namespace ricochet {
 
 ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
-                               const std::vector<PrescribedDof>& prescribed, const ImplicitSettings& settings)
+                               const std::vector<PrescribedDof>& prescribed, const ImplicitSettings& settings,
+                               double contraction)
     : mass_(mass), set_(settings), system_(std::move(matrix)) {
   const int n = static_cast<int>(mass.size());
   pcg_.resize(n);
@@ -15,6 +16,8 @@ ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
   column_x_.setZero(n);
   fixed_.assign(n, 0);
   for (const auto& p : prescribed) fixed_[p.dof] = 1;
+  inv_mass_ = mass.cwiseInverse();
+  for (const auto& p : prescribed) inv_mass_[p.dof] = 1.0;
   const SparseMatrixR& A = system_.matrix;
   for (int i = 0; i < n; ++i)
     for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) {
@@ -22,9 +25,23 @@ ImplicitSystem::ImplicitSystem(SystemMatrix matrix, const Eigen::VectorXd& mass,
       if (!fixed_[i] && !fixed_[j]) continue;
       (i == j ? constrained_diagonal_ : constrained_entries_).push_back(k);
     }
-  // "auto" is the direct solver: on the oblique plate it was faster than PCG at every step
-  // measured, 0.05 to 15 x the critical step (docs/implicit.md, The linear solver: measured).
-  if (set_.linear_solver != LinearSolverKind::pcg) use_direct();
+  // "auto" is the mass iteration where it contracts fast (docs/implicit.md, "The mass
+  // iteration"), with the direct solver, analysed now so that no step allocates, for the steps
+  // it leaves unconverged; elsewhere the direct solver: on the oblique plate it was faster than
+  // PCG at every step measured, 0.05 to 15 x the critical step (docs/implicit.md, The linear
+  // solver: measured).
+  const LinearSolverKind kind = set_.linear_solver;
+  mass_run_ = kind == LinearSolverKind::mass ||
+          (kind == LinearSolverKind::automatic && contraction <= set_.mass_contraction);
+  mass_fallback_ = mass_run_ && kind == LinearSolverKind::automatic;
+  mass_now_ = mass_run_;
+  if (kind == LinearSolverKind::direct || kind == LinearSolverKind::automatic) use_direct();
+}
+
+double mass_contraction_estimate(double theta, double xi, double dt, double dt_crit) {
+  if (!(dt_crit > 0.0)) return 1e300;
+  const double omega_dt = 2.0 * dt / dt_crit;
+  return theta * xi * omega_dt * omega_dt;
 }
 
 int auto_refactor_iterations(double flops, double nonzeros) {
@@ -82,6 +99,10 @@ bool ImplicitSystem::factorize() {
 }
 
 bool ImplicitSystem::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (mass_now_) {
+    x = b.cwiseProduct(inv_mass_);
+    return true;
+  }
   if (direct_) {
     factor_.solve(b, x);
     return true;
@@ -104,6 +125,11 @@ bool ImplicitSystem::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
 
 bool ImplicitSystem::solve_block(const double* b, double* x, int ncol) {
   const Eigen::Index n = inv_diag_.size();
+  if (mass_now_) {
+    for (int k = 0; k < ncol; ++k)
+      Eigen::Map<Eigen::VectorXd>(x + k * n, n) = Eigen::Map<const Eigen::VectorXd>(b + k * n, n).cwiseProduct(inv_mass_);
+    return true;
+  }
   if (direct_) {
     factor_.solve_block(b, x, ncol);
     return true;
@@ -118,6 +144,15 @@ bool ImplicitSystem::solve_block(const double* b, double* x, int ncol) {
 }
 
 void ImplicitSystem::end_iteration(double r, double r_before, double alpha, int iteration) {
+  if (mass_now_) {
+    // The factor takes over a step the mass iteration has not finished (automatic only): after
+    // mass_iterations, or at once when an iteration after the first did not contract or needed a
+    // line search (the first may engage new contacts and grow the residual).
+    if (mass_fallback_ && r > set_.newton_tolerance &&
+        (step_mass_iterations_ >= set_.mass_iterations || alpha < 1.0 || (iteration > 1 && !(r < r_before))))
+      mass_now_ = false;
+    return;
+  }
   // Counting converged steps too refactorized M2 at 1e-5 100 times instead of 35 (docs/implicit.md).
   if (!direct_ || r <= set_.newton_tolerance) return;
   if (!(r <= set_.refactor_contraction * r_before) || alpha < 1.0 || iterations_on_factor_ >= refactor_iterations_) {

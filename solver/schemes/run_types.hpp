@@ -219,6 +219,8 @@ struct RunImplicit {
   long newton_iterations = 0;      // Newton iterations (linear solves of the free motion)
   long linear_iterations = 0;      // CG iterations, all solves
   bool direct_solver = false;      // CHOLMOD Cholesky (true) or PCG (false)
+  bool mass_solver = false;        // steps start with the mass iteration (then the factor)
+  long mass_iterations = 0;        // Newton iterations solved with the lumped mass matrix
   long factorizations = 0;         // direct solver: numeric factorizations of A
   int refactor_iterations = 0;     // direct solver: the refactorization cap in effect (0: none)
   // Wall time of the scheme's phases over the run [s] (summary.json implicit.phase_seconds):

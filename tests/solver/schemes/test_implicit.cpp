@@ -437,7 +437,7 @@ TEST(Implicit, AutomaticCapRefactorizesBeforeNewtonRunsOut) {
     im.linear_solver = LinearSolverKind::direct;
     im.refactor_iterations = cap;
     im.max_newton_iterations = 25;
-    ImplicitSystem system(make_system_matrix(model), model.mass, {}, im);
+    ImplicitSystem system(make_system_matrix(model), model.mass, {}, im, 1.0);
     const double h = model.critical_dt;
     Eigen::VectorXd u = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());
     auto after = [&](double r, double r_before, int iteration) {
@@ -649,6 +649,102 @@ namespace {
 // no momentum the residual's scale was the gravity impulse, below which the internal forces'
 // own round-off lies (ImplicitIntegrator, internal_force_roundoff). The block then stays put:
 // it settles by 1.2e-8 m under its weight and must not drift (< 1e-7 m in 5 ms).
+TEST(Implicit, MassIterationMatchesTheDirectSolver) {
+  // The mass iteration (v1 <- v1 - M^-1 G, docs/implicit.md) converges to the same step as full
+  // Newton with the factor, within the Newton tolerance: 100 steps of the distorted slab at
+  // 0.1 and 0.4 x critical (estimated contraction 0.01 and 0.16 per iteration), and a block
+  // that lands on the ground at 1 m/s (contact, mu = 0 and 0.3) at 0.3 x critical. Each step
+  // stops somewhere below the tolerance 1e-10 of the momentum scale, so two correct iterations
+  // may drift apart by about that per step: the bound is 2 x steps x 1e-10 relative (2e-8 at step
+  // 100). Measured at most 2.1e-9 (u) and 9.9e-9 (v, both the landing block with friction at step
+  // 100). With teeth: the mass iteration at a tolerance of 1e-6 must exceed the bound.
+  auto compare = [](const Model<2>& model, RunSettings s, const char* what) {
+    std::vector<RunResult> runs;
+    for (int k = 0; k < 4; ++k) {
+      const LinearSolverKind solver = k == 0   ? LinearSolverKind::direct
+                                      : k == 2 ? LinearSolverKind::automatic
+                                               : LinearSolverKind::mass;
+      ImplicitSettings im;
+      im.linear_solver = solver;
+      im.refactor_contraction = solver == LinearSolverKind::direct ? 0.0 : im.refactor_contraction;
+      if (k == 3) im.newton_tolerance = 1e-6;
+      runs.push_back(run_implicit(model, s, im));
+      ASSERT_EQ(runs.back().status, RunStatus::ok) << what << ": " << runs.back().reason;
+      ASSERT_EQ(runs.back().fields.size(), 2u);
+    }
+    EXPECT_EQ(runs[1].implicit.factorizations, 0) << what;
+    EXPECT_EQ(runs[1].implicit.mass_iterations, runs[1].implicit.newton_iterations) << what;
+    EXPECT_TRUE(runs[2].implicit.mass_solver) << what;  // auto chose it
+    double loose_max = 0.0;
+    for (std::size_t f = 0; f < 2; ++f) {
+      const FieldSnapshot& a = runs[0].fields[f];
+      const FieldSnapshot& b = runs[1].fields[f];
+      const double du = (a.u - b.u).lpNorm<Eigen::Infinity>() / a.u.lpNorm<Eigen::Infinity>();
+      const double dv = (a.v - b.v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      const double dv_loose = (a.v - runs[3].fields[f].v).lpNorm<Eigen::Infinity>() / a.v.lpNorm<Eigen::Infinity>();
+      std::printf("[implicit] %s, step %ld: mass vs direct max du / max|u| %.2e, max dv / max|v| %.2e "
+                  "(mass at tolerance 1e-6: %.2e); %.2f mass iterations a step\n",
+                  what, a.step, du, dv, dv_loose, static_cast<double>(runs[1].implicit.newton_iterations) / runs[1].steps);
+      const double bound = 2.0 * static_cast<double>(a.step) * 1e-10;
+      EXPECT_LT(du, bound) << what;
+      EXPECT_LT(dv, bound) << what;
+      loose_max = std::max(loose_max, dv_loose / bound);
+    }
+    EXPECT_GT(loose_max, 1.0) << what << ": the bound does not see a 1e4 x looser tolerance";
+  };
+  const Model<2> slab = vibrating_slab(1.0, 0.2);
+  for (double factor : {0.1, 0.4}) {
+    RunSettings s;
+    s.dt = factor * slab.critical_dt;
+    s.end_time = 100 * s.dt;
+    s.field_times = {50 * s.dt, s.end_time};
+    compare(slab, s, factor < 0.2 ? "slab 0.1 x crit" : "slab 0.4 x crit");
+  }
+  const Mesh mesh = verification::grid_mesh(0.1, 0.05, 10, 5, 0.0, false);
+  Model<2> block = verification::single_body_model(mesh, StVenantKirchhoff::make(1e7, 0.3, 1000.0, PlaneMode::stress),
+                                                   PlaneMode::stress, verification::ElementKind::q4_full, 0.05, 0.1,
+                                                   Vec2::Zero());
+  for (int i = 0; i < block.num_nodes(); ++i) block.initial_velocity[2 * i + 1] = -1.0;
+  for (double mu : {0.0, 0.3}) {
+    RunSettings s;
+    s.dt = 0.3 * block.critical_dt;
+    s.end_time = 200 * s.dt;
+    s.field_times = {100 * s.dt, s.end_time};
+    s.obstacles = std::vector<Obstacle>{make_line_obstacle("ground", Vec2::Zero(), Vec2::UnitY())};
+    s.friction = {{mu}};
+    compare(block, s, mu == 0.0 ? "landing block mu 0" : "landing block mu 0.3");
+  }
+}
+
+TEST(Implicit, AutomaticSolverChoosesFromTheStepAndFallsBackToTheFactor) {
+  // auto: the mass iteration below the explicit limit (estimate theta xi (2 dt / dt_crit)^2 <=
+  // mass_contraction), the direct solver above it; a step the mass iteration does not finish in
+  // mass_iterations goes on with the factor (mass_iterations = 1: every step does one mass
+  // iteration, then the factor).
+  const Model<2> model = vibrating_slab(1.0, 0.2);
+  EXPECT_NEAR(mass_contraction_estimate(0.5, 0.5, 0.5, 1.0), 0.25, 1e-15);
+  for (double factor : {0.3, 2.0}) {
+    RunSettings s;
+    s.dt = factor * model.critical_dt;
+    s.end_time = 20 * s.dt;
+    const RunResult r = run_implicit(model, s, ImplicitSettings{});
+    ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+    EXPECT_EQ(r.implicit.mass_solver, factor < 1.0) << factor;
+    EXPECT_EQ(r.implicit.mass_iterations > 0, factor < 1.0) << factor;
+    EXPECT_EQ(r.implicit.factorizations > 0, factor > 1.0) << factor;
+  }
+  RunSettings s;
+  s.dt = 0.3 * model.critical_dt;
+  s.end_time = 20 * s.dt;
+  ImplicitSettings im;
+  im.mass_iterations = 1;
+  const RunResult r = run_implicit(model, s, im);
+  ASSERT_EQ(r.status, RunStatus::ok) << r.reason;
+  EXPECT_EQ(r.implicit.mass_iterations, r.steps);
+  EXPECT_GT(r.implicit.factorizations, 0);
+  EXPECT_GT(r.implicit.newton_iterations, r.steps);
+}
+
 TEST(Implicit, BodyAtRestInContactUnderGravityStarts) {
   const Mesh mesh = verification::grid_mesh(0.1, 0.05, 10, 5, 0.0, false);
   const Model<2> model = verification::single_body_model(
