@@ -10,9 +10,9 @@
 #include "harness/input/case_spec.hpp"
 #include "harness/input/gmsh_reader.hpp"
 #include "harness/input/run_plan.hpp"
-#include "solver/linear/anderson.hpp"
 #include "harness/input/suggest.hpp"
 #include "harness/input/toml_reader.hpp"
+#include "solver/linear/anderson.hpp"
 #include "solver/schemes/threads.hpp"
 
 namespace ricochet {

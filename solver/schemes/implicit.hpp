@@ -52,11 +52,11 @@ class ImplicitIntegratorT {
   const std::string& failure() const { return failure_; }
   long newton_iterations_total() const { return newton_total_; }
   long linear_iterations_total() const { return system_.cg_iterations(); }
-  bool direct_solver() const { return system_.direct() || system_.mass_run(); }  // a factor is (or may be) used
+  bool direct_solver() const { return system_.has_factor(); }  // a factor is (or may be) used
   bool mass_solver() const { return system_.mass_run(); }  // steps start with the mass iteration
   long mass_iterations() const { return system_.mass_iterations(); }
   long factorizations() const { return system_.factorizations(); }
-  int refactor_iterations() const { return system_.direct() ? system_.refactor_iterations() : 0; }
+  int refactor_iterations() const { return system_.has_factor() ? system_.refactor_iterations() : 0; }
   const ImplicitPhases& phases() const { return phases_; }
   long exact_contact_solves() const { return condensed_.exact_solves(); }
   long shifted_iterations() const { return system_.shifted_factorizations(); }
@@ -78,8 +78,8 @@ class ImplicitIntegratorT {
   State s_;
   ContactSetT<D> contact_;
   ImplicitSystem system_;        // A, its factor or CG, the refactorization rule
-  CondensedContact<D> condensed_;
-  AndersonMixer anderson_;  // accelerates the mass iteration (ImplicitSettings::mass_anderson_depth)  // R on x = x_free + W R; H^T R and its response A^-1 dt H^T R
+  CondensedContact<D> condensed_;  // R on x = x_free + W R; H^T R and its response A^-1 dt H^T R
+  AndersonMixer anderson_;  // accelerates the mass iteration (ImplicitSettings::mass_anderson_depth)
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
   Eigen::VectorXd v_prev2_, v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, prescribed_v_;
   std::vector<double> residuals_;

@@ -131,6 +131,7 @@ class ImplicitSystem {
   void end_iteration(double r, double r_before, double alpha, int iteration);
 
   bool direct() const { return direct_ && !mass_now_; }  // this iteration solves with the factor
+  bool has_factor() const { return direct_; }             // the direct solver is set up (analysed)
   bool mass_iteration() const { return mass_now_; }      // this iteration solves with M
   bool mass_run() const { return mass_run_; }                // the run starts its steps with M
   // The identity of the matrix the solves use, for the contact problem's kept columns: 0 for

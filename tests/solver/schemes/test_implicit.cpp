@@ -673,6 +673,8 @@ TEST(Implicit, MassIterationMatchesTheDirectSolver) {
       ASSERT_EQ(runs.back().fields.size(), 2u);
     }
     EXPECT_EQ(runs[1].implicit.factorizations, 0) << what;
+    EXPECT_FALSE(runs[1].implicit.direct_solver) << what;  // "mass" by name sets up no factor
+    EXPECT_TRUE(runs[2].implicit.direct_solver) << what;   // auto keeps one for its fallback
     EXPECT_EQ(runs[1].implicit.mass_iterations, runs[1].implicit.newton_iterations) << what;
     EXPECT_TRUE(runs[2].implicit.mass_solver) << what;  // auto chose it
     double loose_max = 0.0;
