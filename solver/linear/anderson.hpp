@@ -36,10 +36,15 @@ class AndersonMixer {
   void mix(const Eigen::VectorXd& x, Eigen::VectorXd& f) {
     if (depth_ == 0) return;
     if (has_prev_) {
-      dx_.col(next_) = x - x_prev_;
-      df_.col(next_) = f - f_prev_;
+      // The new differences, and their products with the kept ones (gram_): the older
+      // columns' products do not change, so each iteration computes count_ + 1 of them.
+      const int k = next_;
+      dx_.col(k) = x - x_prev_;
+      df_.col(k) = f - f_prev_;
       next_ = (next_ + 1) % depth_;
       if (count_ < depth_) ++count_;
+      for (int j = 0; j < count_; ++j) gram_(k, j) = gram_(j, k) = df_.col(j).dot(df_.col(k));
+      norm2_[k] = df_.col(k).squaredNorm();
     }
     x_prev_ = x;
     f_prev_ = f;
@@ -50,7 +55,7 @@ class AndersonMixer {
     Small a(count_, count_);
     SmallVec rhs(count_), scale(count_);
     for (int i = 0; i < count_; ++i) {
-      const double d = df_.col(i).squaredNorm();
+      const double d = norm2_[i];
       if (!(d > 0.0)) {  // a repeated update: nothing to extrapolate from
         reset();
         return;
@@ -58,7 +63,7 @@ class AndersonMixer {
       scale[i] = 1.0 / std::sqrt(d);
     }
     for (int i = 0; i < count_; ++i) {
-      for (int j = 0; j <= i; ++j) a(i, j) = a(j, i) = scale[i] * scale[j] * df_.col(i).dot(df_.col(j));
+      for (int j = 0; j <= i; ++j) a(i, j) = a(j, i) = scale[i] * scale[j] * gram_(i, j);
       a(i, i) += 1e-12;
       rhs[i] = scale[i] * df_.col(i).dot(f);
     }
@@ -78,6 +83,8 @@ class AndersonMixer {
   int next_ = 0;   // the column the next difference goes to
   bool has_prev_ = false;
   Eigen::MatrixXd dx_, df_;
+  Eigen::Matrix<double, kMaxDepth, kMaxDepth> gram_;  // gram_(i, j) = dF_i . dF_j of the kept columns
+  Eigen::Matrix<double, kMaxDepth, 1> norm2_;         // |dF_i|^2
   Eigen::VectorXd x_prev_, f_prev_;
 };
 

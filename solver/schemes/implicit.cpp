@@ -101,11 +101,15 @@ bool ImplicitIntegratorT<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x)
 }
 
 template <class M>
-double ImplicitIntegratorT<M>::residual(bool with_energy) {
+double ImplicitIntegratorT<M>::residual() {
   PhaseTimer timer(phases_.residual);
   const double dt = s_.dt, th = set_.theta, xi = set_.xi;
   u1_ = u0_ + dt * ((1.0 - th) * v0_ + th * v1_);
-  s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy);
+  const bool fused = evaluation_++ >= fuse_from_;
+  last_energy_ = fused && fused_energy_;
+  last_stress_ = fused && fused_stress_ != nullptr;
+  s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), last_energy_,
+                              last_stress_ ? fused_stress_ : nullptr);
   g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * condensed_.impulse();
   // Nodal loads, xi-averaged like the other forces: dt [(1 - xi) F(t_n) + xi F(t_n+1)].
   for (const LoadedDof& l : s_.loads) g_[l.load.dof] -= dt * load_average(l.load);
@@ -118,15 +122,10 @@ double ImplicitIntegratorT<M>::residual(bool with_energy) {
   // motion decays.
   // A body at rest has no momentum, and its internal forces balance gravity and the contact
   // reactions: then the floor is the internal forces' own round-off (internal_force_roundoff),
-  // which the tolerance must not ask G to go below.
-  scale_ = std::max({scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
-                     model_.mass.cwiseProduct(v0_).template lpNorm<Eigen::Infinity>(),
-                     dt * f1_.lpNorm<Eigen::Infinity>(), dt * f0_.lpNorm<Eigen::Infinity>(),
-                     dt * s_.f_ext.lpNorm<Eigen::Infinity>(),
-                     dt * condensed_.impulse().template lpNorm<Eigen::Infinity>(),
-                     dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
-  const double scale = scale_;
-  return g_.lpNorm<Eigen::Infinity>() / scale;
+  // which the tolerance must not ask G to go below. The step's constant terms are step_scale_.
+  scale_ = std::max({scale_, step_scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
+                     dt * f1_.lpNorm<Eigen::Infinity>(), dt * condensed_.impulse().template lpNorm<Eigen::Infinity>()});
+  return g_.lpNorm<Eigen::Infinity>() / scale_;
 }
 
 template <class M>
@@ -224,12 +223,27 @@ bool ImplicitIntegratorT<M>::engage_penetrating() {
 }
 
 template <class M>
-bool ImplicitIntegratorT<M>::step(bool with_energy) {
+bool ImplicitIntegratorT<M>::step(bool with_energy, const StressTracking* stress) {
   u0_ = s_.u;
   v0_ = s_.v_half;
   f0_ = s_.f_int;
   const double hourglass_power0 = s_.forces.hourglass_power;
-  predict(s_.step > 0 && s_.dt <= model_.critical_dt);
+  step_scale_ = std::max({model_.mass.cwiseProduct(v0_).template lpNorm<Eigen::Infinity>(),
+                          s_.dt * f0_.lpNorm<Eigen::Infinity>(), s_.dt * s_.f_ext.lpNorm<Eigen::Infinity>(),
+                          s_.dt * force_roundoff_ / set_.newton_tolerance, 1e-300});
+  // A history sample's maxima fold in every pass they are given: the Newton iterates' passes
+  // take the tracking with sampled_max pointing nowhere, and the converged pass's own maxima
+  // (ForceTotals::sampled) go to the sample below. A snapshot's cell values are overwritten by
+  // each pass, so the converged one's stay.
+  evaluation_ = 0;
+  fused_energy_ = with_energy;
+  fused_stress_ = nullptr;
+  if (stress) {
+    fused_tracking_ = *stress;
+    fused_tracking_.sampled_max = stress->sampled_max ? &fused_sampled_ : nullptr;
+    fused_stress_ = &fused_tracking_;
+  }
+  predict(s_.step > 0 && s_.dt <= model_.critical_dt ? Predictor::extrapolate : Predictor::constant);
   // The last step's reactions in the frame (and on the stencil) they were solved in.
   condensed_.impulse_of_all(contact_);
   for (std::size_t k = 0; k < contact_.candidates.size(); ++k) engaged_[k] = contact_.reaction[k].n > 0.0;
@@ -237,14 +251,33 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
   step_unconverged_ = false;
   system_.begin_step();
   anderson_.reset();
-  double r = residual(false);
-  if (s_.step > 0 && (!std::isfinite(r) || !(s_.forces.min_jacobian > 0.0))) {
-    predict(false);  // the extrapolated predictor inverted an element: start from v0 instead
-    r = residual(false);
+  double r = residual();
+  // A predictor that inverts an element (or gives a non-finite residual) is replaced: the
+  // extrapolated one by v1 = v0, and v1 = v0 by the iterate that stays at u0 (valid, since u0
+  // is the last converged state). Above the explicit limit the trapezoidal rule alternates the
+  // unresolved modes' velocities, so v1 = v0 moves their nodes the wrong way by dt |v0|: on the
+  // oblique plate's M2x2 at 1e-4 s that inverted an element at step 21 and Newton, whose line
+  // search cannot leave an inverted state, stopped.
+  auto invalid = [&] { return !std::isfinite(r) || !(s_.forces.min_jacobian > 0.0); };
+  if (s_.step > 0 && invalid() && s_.dt <= model_.critical_dt) {
+    predict(Predictor::constant);
+    r = residual();
+  }
+  if (invalid()) {
+    predict(Predictor::hold);
+    r = residual();
   }
   int sweeps = 0;
   if (!newton(r, sweeps)) return false;
-  if (with_energy) s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), true);
+  // The converged iterate's pass gave the energies and stresses if the step predicted it was
+  // the one; otherwise one more pass (the same forces, f1 is rewritten with the same values).
+  fuse_from_ = evaluation_ - 1;
+  if ((with_energy && !last_energy_) || (stress != nullptr && !last_stress_)) {
+    PhaseTimer timer(phases_.residual);
+    s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), with_energy, stress);
+  } else if (stress != nullptr && stress->sampled_max != nullptr) {
+    max_into(*stress->sampled_max, s_.forces.sampled);
+  }
   close_step(hourglass_power0, sweeps);
   return true;
 }
@@ -252,8 +285,7 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
 // Predictor: where the step resolves the dynamics (dt <= critical_dt), quadratic extrapolation of
 // the velocity, v1 = 3 v0 - 3 v_{-1} + v_{-2} (linear, 2 v0 - v_{-1}, at the second step; on the
 // oblique plate's M2 at 1e-6 s it starts Newton 8x closer than the linear one); otherwise (and at
-// the first step) v1 = v0. A
-// contact that ended the last step with a reaction is predicted to stay closed: its slave node's
+// the first step) v1 = v0; `hold` keeps u1 = u0 (the fallbacks of step()). A contact that ended the last step with a reaction is predicted to stay closed: its slave node's
 // normal velocity is set so that the stencil's gap does not change over the step (position
 // level: n . sum_j coef_j ((1 - theta) v0_j + theta v1_j) = 0) or its normal relative velocity
 // is zero (velocity level). The trapezoidal rule alternates a closed contact's normal velocity
@@ -262,15 +294,17 @@ bool ImplicitIntegratorT<M>::step(bool with_energy) {
 // contact step (docs/implicit.md, "Predictor"). Prescribed DOFs take their velocity, or the one
 // that reaches their displacement at t_n+1.
 template <class M>
-void ImplicitIntegratorT<M>::predict(bool extrapolate) {
+void ImplicitIntegratorT<M>::predict(Predictor kind) {
   const double dt = s_.dt, th = set_.theta;
   const double t1 = s_.time + dt;
-  if (extrapolate && s_.step > 1)
+  if (kind == Predictor::extrapolate && s_.step > 1)
     v1_ = 3.0 * (v0_ - v_prev_) + v_prev2_;
-  else if (extrapolate)
+  else if (kind == Predictor::extrapolate)
     v1_ = 2.0 * v0_ - v_prev_;
-  else
+  else if (kind == Predictor::constant)
     v1_ = v0_;
+  else
+    v1_ = (-(1.0 - th) / th) * v0_;  // u1 = u0 + dt ((1 - theta) v0 + theta v1) = u0
   const bool position = run_.contact.level == ContactLevel::position;
   const ContactSetT<D>& cs = contact_;
   for (std::size_t k = 0; k < cs.candidates.size(); ++k) {
@@ -357,11 +391,11 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     if (system_.mass_iteration()) anderson_.mix(v1_, dv_free_);
     // Backtracking: the full Newton update unless it inverts an element or is not finite
     // (large steps on coarse stiff problems); then halve it, up to 10 times.
-    v_base_ = v1_;
+    v_base_.swap(v1_);  // v1_ is set from it below
     double alpha = 1.0;
     for (int ls = 0;; ++ls) {
       v1_ = v_base_ + alpha * dv_free_;
-      r = residual(false);
+      r = residual();
       if ((std::isfinite(r) && s_.forces.min_jacobian > 0.0) || ls == 10) break;
       alpha *= 0.5;
     }
@@ -398,11 +432,12 @@ void ImplicitIntegratorT<M>::close_step(double hourglass_power0, int sweeps) {
   auto du = [&](int j) -> Vec { return u1_.template segment<D>(D * j) - u0_.template segment<D>(D * j); };
   for (int k : cs.active) record_work(cs, k, 1.0, du, true, du);
   finish_step(cs, sweeps, !step_unconverged_);
-  v_prev2_ = v_prev_;
-  v_prev_ = v0_;
-  s_.u = u1_;
-  s_.v_half = v1_;
-  s_.f_int = f1_;
+  // Swaps, not copies: v0_, u1_, v1_ and f1_ are set again before the next step reads them.
+  v_prev2_.swap(v_prev_);
+  v_prev_.swap(v0_);
+  s_.u.swap(u1_);
+  s_.v_half.swap(v1_);
+  s_.f_int.swap(f1_);
   ++s_.step;
   s_.time = static_cast<double>(s_.step) * dt;
 }
@@ -440,24 +475,24 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
     result.implicit.direct_solver = integrator.direct_solver();
     return result;
   }
+  // The initial state's stresses from a pass of their own; every later state's from the force
+  // pass of the Newton iterate that converged to it (ImplicitIntegratorT::step), or one more.
+  if (const StressTracking* st = monitor.stress_tracking(0))
+    monitor.track_stress(s, internal_forces(model, s.u.data(), s.v_half.data(), stress_forces.data(), false, st).stress);
   for (;;) {
     threads.adapt();
     const long n = s.step;
-    // The Newton iterates' force passes are not states of the run: the converged state's
-    // stresses come from a force pass of their own, which tracks them (the vectorized kernel:
-    // 0.4 of the cost of the serial stress_peaks() pass on the oblique plate's M2; the two agree
-    // to a few ulps, tests/solver/materials/test_stress.cpp).
-    if (const StressTracking* st = monitor.stress_tracking(n))
-      monitor.track_stress(s, internal_forces(model, s.u.data(), s.v_half.data(), stress_forces.data(), false, st).stress);
     if (monitor.is_monitor_step(n)) {
       if (!monitor.observe(s, kinetic0)) break;
       if (progress) progress(n, planned, s.time);
     }
     if (n == planned) break;
-    if (!integrator.step(monitor.is_monitor_step(n + 1))) {
+    const StressTracking* st = monitor.stress_tracking(n + 1);
+    if (!integrator.step(monitor.is_monitor_step(n + 1), st)) {
       monitor.diverge(s, integrator.failure());
       break;
     }
+    if (st) monitor.track_stress(s, s.forces.stress);
     if (with_contact) monitor.contact_step(s.time - s.dt, s.dt);  // the step just taken: [t_n, t_n+1]
     if (!(s.forces.min_jacobian > 0.0)) {
       monitor.diverge(s, "inverted element (det F = " + std::to_string(s.forces.min_jacobian) + ")");

@@ -39,10 +39,14 @@ class ImplicitIntegratorT {
 
   ImplicitIntegratorT(const M& model, const RunSettings& run, const ImplicitSettings& settings);
 
-  // t_n -> t_{n+1}. With `with_energy` the energies of the new state are computed. Returns
-  // false when Newton or a linear solve fails (failure() says why); the state is then that of
-  // the failed iterate.
-  bool step(bool with_energy);
+  // t_n -> t_{n+1}. With `with_energy` the energies of the new state are computed, with
+  // `stress` (RunMonitor::stress_tracking(n + 1)) its stress peaks into state().forces, and
+  // what the tracking samples. Both come from the force pass of the Newton iterate that
+  // converges when the step predicts which one that is (from the last step's count of
+  // iterations), otherwise from one pass more.
+  // Returns false when Newton or a linear solve fails (failure() says why); the state is then
+  // that of the failed iterate.
+  bool step(bool with_energy, const StressTracking* stress = nullptr);
 
   // The state at t_n for the observers: u = u_n, v_half = v_n and a = 0 (so velocity_at_step
   // gives v_n), f_int = f_int(u_n, v_n), forces = its totals.
@@ -62,11 +66,16 @@ class ImplicitIntegratorT {
   long shifted_iterations() const { return system_.shifted_factorizations(); }
 
  private:
-  double residual(bool with_energy);  // G at (u1, v1) into g_, returns its relative inf-norm
+  // G at (u1, v1) into g_, returns its relative inf-norm. From the step's evaluation
+  // fuse_from_ on, the force pass also gives what step() was asked for (fused_*).
+  double residual();
   double load_average(const NodalLoad& l) const;  // (1 - xi) F(t_n) + xi F(t_n+1) [N]
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   bool solve_contact();  // from dv_free_: the reactions into contact_, their response into condensed_
-  void predict(bool extrapolate);           // v1 of the step's first iterate
+  // The step's first iterate v1: extrapolated from the last steps' velocities, v0, or the one
+  // that keeps u1 = u0 (implicit.cpp).
+  enum class Predictor { extrapolate, constant, hold };
+  void predict(Predictor kind);
   bool newton(double r, int& sweeps);       // the iterations to the converged v1
   void close_step(double hourglass_power0, int sweeps);  // bookkeeping; u1, v1 become the state
   bool engage_penetrating();  // engages candidates behind their obstacle at u1; true if any
@@ -85,6 +94,16 @@ class ImplicitIntegratorT {
   std::vector<double> residuals_;
   std::string failure_;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
+  double step_scale_ = 0.0;  // the step's constant terms of the momentum scale (M v0, dt f0, dt f_ext)
+  // The force pass that gives the step's energies and stresses (step()): the step's residual
+  // evaluations are counted from 0 (the predictor's); from evaluation fuse_from_ (the index of
+  // the last step's converged one) on, a pass computes what fused_energy_ and fused_stress_ ask.
+  int evaluation_ = 0, fuse_from_ = 1;
+  bool fused_energy_ = false;
+  const StressTracking* fused_stress_ = nullptr;  // &fused_tracking_ or null
+  StressTracking fused_tracking_;  // the step's tracking, sampled_max redirected to fused_sampled_
+  VonMises2 fused_sampled_{0.0, 0.0, 0.0};  // what the iterates' passes fold in, not used
+  bool last_energy_ = false, last_stress_ = false;  // what the last evaluation's pass computed
   double force_roundoff_ = 0.0;  // round-off floor of the internal forces [N] (implicit.cpp)
   long newton_total_ = 0;
   ImplicitPhases phases_;

@@ -44,17 +44,12 @@ double mass_contraction_estimate(double theta, double xi, double dt, double dt_c
   return theta * xi * omega_dt * omega_dt;
 }
 
-int auto_refactor_iterations(double flops, double nonzeros) {
-  if (!(nonzeros > 0.0)) return 6;
-  return static_cast<int>(std::max(6.0, std::min(1000.0, std::round(flops / (12.0 * nonzeros)))));
-}
-
 void ImplicitSystem::use_direct() {
   direct_ = true;
   factor_.analyze(system_.matrix);
-  refactor_iterations_ = set_.refactor_iterations > 0
-                             ? set_.refactor_iterations
-                             : auto_refactor_iterations(factor_.factor_flops(), factor_.factor_nonzeros());
+  // Automatic: no cap of its own (the step's max_newton_iterations); the contraction, line-search
+  // and run-out rules of end_iteration() decide.
+  refactor_iterations_ = set_.refactor_iterations > 0 ? set_.refactor_iterations : set_.max_newton_iterations;
   a_values_.assign(system_.matrix.valuePtr(), system_.matrix.valuePtr() + system_.matrix.nonZeros());
   refactor_next_ = true;
 }

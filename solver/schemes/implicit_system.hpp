@@ -53,8 +53,8 @@ struct ImplicitSettings {
   // (r_k+1 > refactor_contraction r_k), needed a line search, or was the
   // refactor_iterations-th of this step on the same factor. refactor_contraction = 0
   // refactorizes every iteration (full Newton); refactor_iterations = 1 every iteration but the
-  // first of each step; refactor_iterations = 0 (automatic) sets it from the factorization's
-  // cost (auto_refactor_iterations).
+  // first of each step; refactor_iterations = 0 (automatic) sets no cap of its own and adds the
+  // run-out rule of end_iteration() (docs/implicit.md, "Modified Newton").
   double refactor_contraction = 0.5;  // [0, 1)
   int refactor_iterations = 0;        // >= 0; 0: automatic
   // The mass iteration of `automatic` (docs/implicit.md, "The mass iteration"): used when the
@@ -69,15 +69,6 @@ struct ImplicitSettings {
 // critical step is dt_crit (the cells' L_e / c_p): the spectral radius of theta xi dt^2 M^-1 K,
 // theta xi (dt omega_max)^2 with omega_max = 2 / dt_crit.
 double mass_contraction_estimate(double theta, double xi, double dt, double dt_crit);
-
-// The automatic refactor_iterations of a factor with `flops` floating-point operations per
-// factorization and `nonzeros` entries (docs/implicit.md, "Modified Newton"): a Newton
-// iteration on a kept factor costs about two solves, 2 x 4 nnz(L) operations, so a
-// factorization costs F/S = flops / (8 nnz(L)) of them, and a step may spend two thirds of that
-// on the old factor before a new one pays: max(6, round(flops / (12 nnz(L)))). 6 is the cap
-// measured best on M2 (where the ratio gives 6); it grows with the mesh (10 on M2x2, 18 on
-// M2x4), where a factorization costs more iterations.
-int auto_refactor_iterations(double flops, double nonzeros);
 
 class ImplicitSystem {
  public:
@@ -123,8 +114,8 @@ class ImplicitSystem {
   }
   // and an iteration that left the residual r (from r_before; line-search factor alpha) above the
   // tolerance asks for a new factor when it contracted too little, needed a line search, or was
-  // the refactor_iterations-th on this factor. With the automatic cap (refactor_iterations = 0)
-  // it also asks for one when the iterations still needed at the rate just seen, log(tol / r) /
+  // the refactor_iterations-th on this factor. Automatic (refactor_iterations = 0: no cap but
+  // max_newton_iterations) it also asks for one when the iterations still needed at the rate just seen, log(tol / r) /
   // log(r / r_before), would take the step (`iteration` Newton iterations so far) to within two
   // of max_newton_iterations. A step that converges keeps the factor. On the mass iteration of
   // `automatic`, the step goes on with the factor once mass_iterations have not converged it.
@@ -161,7 +152,7 @@ class ImplicitSystem {
   long factor_id_ = 0;
   bool refactor_next_ = true;     // the next Newton iteration assembles and factorizes A
   int iterations_on_factor_ = 0;  // Newton iterations of this step on the current factor
-  int refactor_iterations_ = 0;   // set_.refactor_iterations, or the automatic one
+  int refactor_iterations_ = 0;   // set_.refactor_iterations, or max_newton_iterations (automatic)
   bool mass_run_ = false;         // the run's steps start with the mass iteration
   bool mass_fallback_ = false;    // ... and go on with the factor after mass_iterations (auto)
   bool mass_now_ = false;         // this step is on the mass iteration
