@@ -80,7 +80,7 @@ ImplicitIntegratorT<M>::ImplicitIntegratorT(const M& model, const RunSettings& r
   if (system_.mass_run()) anderson_.reserve(n, settings.mass_anderson_depth);
   force_roundoff_ = internal_force_roundoff(model);
   for (Eigen::VectorXd* v : {&v_prev2_, &v_prev_, &v_base_, &u0_, &v0_, &f0_, &u1_, &v1_, &f1_, &g_, &rhs_, &dv_free_,
-                             &prescribed_v_})
+                             &prescribed_v_, &y_frame_})
     v->setZero(n);
   s_.a.setZero();
   s_.forces = internal_forces(model, s_.u.data(), s_.v_half.data(), s_.f_int.data(), true);
@@ -142,8 +142,13 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   // reactions left the nodes, x_pred + c y (y the response to them), and each gap is carried
   // back to the free prediction linearly, so that x = x_free + c H y stays the gap where the
   // frame is taken; at convergence that is where the nodes end. Without, at x_pred (the paper's).
+  // The first frame_updates + 1 iterations of a step take the frames where the last one's
+  // reactions left the nodes; later ones keep that shift (y_frame_), so that the frames move
+  // only with the iterate, as without updates: re-taking them in every iteration let a node of
+  // the ball on a block's fine mesh switch between faces, and Newton stalled at 4e-6 (step 31).
   const bool shifted = position && run_.contact.frame_updates > 0;
-  const Eigen::VectorXd& y = condensed_.response();  // of the last iteration's reactions
+  if (shifted && iteration_ <= run_.contact.frame_updates) y_frame_ = condensed_.response();
+  const Eigen::VectorXd& y = y_frame_;  // the response to the reactions the frames follow
   auto x_pred = [&](int j) -> Vec {
     if (!shifted) return model_.ref.col(j) + u_pred(j);
     return model_.ref.col(j) + u_pred(j) + c * y.template segment<D>(D * j);
@@ -379,6 +384,7 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
       bool solved;
       {
         PhaseTimer timer(phases_.contact);
+        iteration_ = it;
         solved = solve_contact();
       }
       phases_.contact -= phases_.solve - solve_before;

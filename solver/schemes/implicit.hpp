@@ -91,6 +91,8 @@ class ImplicitIntegratorT {
   AndersonMixer anderson_;  // accelerates the mass iteration (ImplicitSettings::mass_anderson_depth)
   std::vector<unsigned char> engaged_;  // per candidate: in the contact problem of this step
   Eigen::VectorXd v_prev2_, v_prev_, v_base_, u0_, v0_, f0_, u1_, v1_, f1_, g_, rhs_, dv_free_, prescribed_v_;
+  Eigen::VectorXd y_frame_;  // the response whose shift the contact frames take (solve_contact)
+  int iteration_ = 0;         // the Newton iteration solve_contact() runs in
   std::vector<double> residuals_;
   std::string failure_;
   double scale_ = 0.0;  // largest momentum scale of the residual so far
