@@ -1,6 +1,10 @@
 #include "solver/linear/cholmod_factor.hpp"
 
 #include <cholmod.h>
+#include <dlfcn.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <array>
 #include <cmath>
@@ -141,6 +145,51 @@ cholmod_sparse view(int n, const int* outer, const int* inner, const double* val
   return a;
 }
 
+// CHOLMOD's supernodal numeric factorization (Debian's build, with OpenMP) opens parallel
+// regions of a fixed 4 threads (`num_threads(CHOLMOD_OMP_NUM_THREADS) if (...)`) to clear and
+// fill supernodes, whatever the run's thread count. On a shared 2-core machine their spinning
+// made a factorization of the oblique plate's M2x2 3.8x slower. Made inactive
+// (max-active-levels 0) they run on one thread, but libgomp still builds, and frees, a team for
+// each region it meets (a 1.5 KB memalign in GOMP_parallel, 1878 per three rounds of the
+// allocation test), and the implicit scheme must not allocate inside a step. So while a CHOLMOD
+// call runs (SerialOpenMP in scope, outside any parallel region), the regions it opens run as a
+// plain call of their body on this thread: GOMP_parallel below, which the program defines and
+// so is the one libcholmod's calls bind to (an executable's definition comes first), runs
+// fn(data) itself; every other region goes to libgomp's GOMP_parallel. A body outside a team
+// sees omp_get_num_threads() = 1 and omp_get_thread_num() = 0, so a statically scheduled loop
+// (CHOLMOD's are) runs all its iterations, as libgomp's one-thread team would.
+thread_local bool t_inline_regions = false;
+
+using GompParallel = void (*)(void (*)(void*), void*, unsigned, unsigned);
+// libgomp's own entry point, resolved before main (dlsym may allocate on its first call).
+const GompParallel g_libgomp_parallel = reinterpret_cast<GompParallel>(dlsym(RTLD_NEXT, "GOMP_parallel"));
+
+class SerialOpenMP {
+ public:
+#ifdef _OPENMP
+  SerialOpenMP() : levels_(omp_get_max_active_levels()), inline_(omp_get_level() == 0) {
+    omp_set_max_active_levels(0);
+    t_inline_regions = inline_;
+  }
+  ~SerialOpenMP() {
+    t_inline_regions = false;
+    omp_set_max_active_levels(levels_);
+  }
+
+ private:
+  int levels_;
+  bool inline_;
+#endif
+};
+
+// Whether the BLAS in the process is OpenBLAS (Debian's libopenblas0-serial or -pthread behind
+// libblas.so.3): its symbol is then visible. OpenBLAS's own threads, if any, are set to one.
+bool find_optimized_blas() {
+  using SetThreads = void (*)(int);
+  if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+  return dlsym(RTLD_DEFAULT, "openblas_get_config") != nullptr;
+}
+
 }  // namespace
 
 CholmodFactor::CholmodFactor() {
@@ -177,11 +226,20 @@ void CholmodFactor::analyze(const RowMajor& a, Method method, Ordering ordering)
   common_->method[0].ordering = ordering == Ordering::amd     ? CHOLMOD_AMD
                                 : ordering == Ordering::metis ? CHOLMOD_METIS
                                                               : CHOLMOD_NESDIS;
-  common_->supernodal = method == Method::supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  // automatic: CHOLMOD's own rule (supernodal when its analysis counts at least
+  // supernodal_switch flops per entry of L), with an optimized BLAS only.
+  common_->supernodal = method == Method::supernodal   ? CHOLMOD_SUPERNODAL
+                        : method == Method::simplicial ? CHOLMOD_SIMPLICIAL
+                        : optimized_blas()             ? CHOLMOD_AUTO
+                                                       : CHOLMOD_SIMPLICIAL;
+  common_->supernodal_switch = kSupernodalFlopsPerEntry;
   // Simplicial: keep L D L^T (no square roots); supernodal is L L^T by construction.
   common_->final_ll = 0;
   cholmod_sparse s = view(n_, outer_, inner_, a.valuePtr());
-  factor_ = cholmod_analyze(&s, common_);
+  {
+    SerialOpenMP serial;
+    factor_ = cholmod_analyze(&s, common_);
+  }
   if (!factor_ || common_->status < CHOLMOD_OK)
     throw std::runtime_error("CHOLMOD analysis failed (status " + std::to_string(common_->status) + ")");
   // Warm-up on the identity with this pattern (positive definite whatever the pattern): the
@@ -197,11 +255,19 @@ void CholmodFactor::analyze(const RowMajor& a, Method method, Ordering ordering)
   // so that the recycling allocator holds the blocks of all of them.
   std::vector<double> bb(kMaxBlock * static_cast<std::size_t>(n_), 1.0), xb(bb.size());
   for (int ncol = kMaxBlock; ncol >= 1; --ncol) solve_block(bb.data(), xb.data(), ncol);
+  // Once more: the solves kept the blocks the first factorization freed where their sizes
+  // matched (the supernodal method's workspace header is a cholmod_dense, as are the solves'),
+  // so the factorization's own are in the lists only after a second one.
+  if (!factorize(identity.data())) throw std::runtime_error("CHOLMOD warm-up factorization failed");
 }
 
 bool CholmodFactor::factorize(const double* a_values) {
   cholmod_sparse s = view(n_, outer_, inner_, a_values);
-  const int ok = cholmod_factorize(&s, factor_, common_);
+  int ok;
+  {
+    SerialOpenMP serial;
+    ok = cholmod_factorize(&s, factor_, common_);
+  }
   // L L^T (supernodal) stops at the first pivot that is not positive (status CHOLMOD_NOT_POSDEF,
   // minor < n); a NaN pivot also fails that test. L D L^T (simplicial) stops only at a zero
   // pivot: it factorizes indefinite matrices, so D is checked here (D_jj is the first entry of
@@ -212,6 +278,13 @@ bool CholmodFactor::factorize(const double* a_values) {
     const double* x = static_cast<const double*>(factor_->x);
     for (int j = 0; j < n_; ++j)
       if (!(x[p[j]] > 0.0) || !std::isfinite(x[p[j]])) return false;
+  }
+  // OpenBLAS's dpotrf passes a NaN pivot (its test "not positive" is false for NaN), so the
+  // supernodal blocks are checked here: O(nnz(L)) against the factorization's O(flops).
+  if (factor_->is_super) {
+    const double* x = static_cast<const double*>(factor_->x);
+    for (std::size_t k = 0; k < factor_->xsize; ++k)
+      if (!std::isfinite(x[k])) return false;
   }
   return true;
 }
@@ -225,6 +298,7 @@ void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   rhs.x = const_cast<double*>(b.data());
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
+  SerialOpenMP serial;
   if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &x_, nullptr, &y_, &e_, common_))
     throw std::runtime_error("CHOLMOD solve failed (status " + std::to_string(common_->status) + ")");
   x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(x_->x), n_);
@@ -240,12 +314,28 @@ void CholmodFactor::solve_block(const double* b, double* x, int ncol) {
   rhs.x = const_cast<double*>(b);
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
+  SerialOpenMP serial;
   if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &xb_, nullptr, &yb_, &eb_, common_))
     throw std::runtime_error("CHOLMOD solve failed (status " + std::to_string(common_->status) + ")");
   std::memcpy(x, xb_->x, sizeof(double) * static_cast<std::size_t>(n_) * static_cast<std::size_t>(ncol));
 }
 
 double CholmodFactor::factor_nonzeros() const { return common_->lnz; }
+bool CholmodFactor::supernodal() const { return factor_ != nullptr && factor_->is_super; }
+
+bool CholmodFactor::optimized_blas() {
+  static const bool found = find_optimized_blas();
+  return found;
+}
 double CholmodFactor::factor_flops() const { return common_->fl; }
 
 }  // namespace ricochet
+
+// See SerialOpenMP above. The signature is libgomp's (GOMP_4.0, gcc >= 4.9).
+extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
+  if (ricochet::t_inline_regions) {
+    fn(data);
+    return;
+  }
+  ricochet::g_libgomp_parallel(fn, data, num_threads, flags);
+}

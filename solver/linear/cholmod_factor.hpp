@@ -1,9 +1,9 @@
 // Sparse Cholesky factorization of the implicit scheme's iteration matrix by SuiteSparse CHOLMOD
 // (Debian's libsuitesparse-dev), called through its C interface:
 //  - analyze() once per run: fill-reducing ordering (AMD), elimination tree, supernodes and
-//    the pattern of L; it also runs one factorization and one solve on a positive definite
-//    matrix of the same pattern, so that every block CHOLMOD's numeric phase asks for has been
-//    allocated once (see below);
+//    the pattern of L; it also runs a factorization, the solves and a second factorization on a
+//    positive definite matrix of the same pattern, so that every block CHOLMOD's numeric phase
+//    asks for has been allocated once (see below);
 //  - factorize() per refactorization: P A P^T = L L^T (supernodal) or L D L^T (simplicial) into
 //    the analysed structure;
 //  - solve() per right-hand side: two triangular solves with reused CHOLMOD work vectors.
@@ -17,9 +17,9 @@
 // through the SuiteSparse_config function pointers, which this file points, once per process,
 // at a recycling allocator: a freed block is kept in a list for its exact size and handed back
 // on the next request of that size. The numeric phase of a fixed pattern asks for the same
-// sizes every time, so after analyze()'s warm-up factorize() and solve() of the simplicial
-// method (the implicit scheme's) take no memory from the heap (tests/solver/linear/test_cholmod_factor.cpp
-// and ImplicitStepsDoNotAllocate count it); the supernodal method still allocates. The kept
+// sizes every time, so after analyze()'s warm-up factorize() and solve() take no memory from the
+// heap (tests/solver/linear/test_cholmod_factor.cpp and ImplicitStepsDoNotAllocate count it;
+// the supernodal method once CHOLMOD's OpenMP regions run serially, cholmod_factor.cpp). The kept
 // blocks (a few times the size of L) are returned to the heap only at process exit.
 //
 // Why not Eigen's CholmodSupport: its factorize() takes a column-major SparseMatrix (our
@@ -38,13 +38,21 @@ namespace ricochet {
 class CholmodFactor {
  public:
   using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-  // Measured on the oblique plate's matrices (docs/implicit.md): with Debian's reference BLAS
-  // the supernodal factorization is up to 2x faster on M2 but its solve 2.4x slower, and the
-  // implicit scheme's modified Newton does many solves per factorization, so it uses simplicial.
+  // Measured on the oblique plate's matrices (docs/implicit.md, "The factorization method"):
+  // with Debian's reference BLAS the supernodal method gains nothing (its solve is up to 2.4x
+  // slower); with OpenBLAS its factorization is 4-6x faster on M2x4 and the 3D M2x2, its solve
+  // as fast there but slower on M2, whose factor is small. The implicit scheme uses automatic.
   enum class Method {
     supernodal,  // L L^T with dense supernode blocks (BLAS)
     simplicial,  // L D L^T column by column, no BLAS
+    automatic,   // supernodal with an optimized BLAS (optimized_blas()) where CHOLMOD's analysis
+                 // counts at least kSupernodalFlopsPerEntry flops per entry of L; else simplicial
   };
+  // 72 on M2 (simplicial measured faster), 116 on M2x2, 210 on M2x4 (supernodal faster).
+  static constexpr double kSupernodalFlopsPerEntry = 100.0;
+  // OpenBLAS is the process's BLAS (Debian's libopenblas0-serial, which ci/setup installs);
+  // its own threads, if it has any, are then set to one.
+  static bool optimized_blas();
 
   // The fill-reducing ordering of analyze() (docs/implicit.md, "The linear solver"):
   enum class Ordering {
@@ -80,6 +88,7 @@ class CholmodFactor {
   bool analyzed() const { return factor_ != nullptr; }
   double factor_nonzeros() const;  // entries of L (supernodal: including the zeros of its blocks)
   double factor_flops() const;     // floating-point operations of one factorization (CHOLMOD's count)
+  bool supernodal() const;         // the analysed factor is supernodal (Method::automatic's choice)
 
  private:
   void release();

@@ -57,6 +57,7 @@ class ImplicitIntegratorT {
   long newton_iterations_total() const { return newton_total_; }
   long linear_iterations_total() const { return system_.cg_iterations(); }
   bool direct_solver() const { return system_.has_factor(); }  // a factor is (or may be) used
+  bool supernodal() const { return system_.supernodal(); }     // that factor is supernodal
   bool mass_solver() const { return system_.mass_run(); }  // steps start with the mass iteration
   long mass_iterations() const { return system_.mass_iterations(); }
   long factorizations() const { return system_.factorizations(); }

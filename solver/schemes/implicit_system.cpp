@@ -46,7 +46,7 @@ double mass_contraction_estimate(double theta, double xi, double dt, double dt_c
 
 void ImplicitSystem::use_direct() {
   direct_ = true;
-  factor_.analyze(system_.matrix);
+  factor_.analyze(system_.matrix, CholmodFactor::Method::automatic);
   // Automatic: no cap of its own (the step's max_newton_iterations); the contraction, line-search
   // and run-out rules of end_iteration() decide.
   refactor_iterations_ = set_.refactor_iterations > 0 ? set_.refactor_iterations : set_.max_newton_iterations;

@@ -123,6 +123,7 @@ class ImplicitSystem {
 
   bool direct() const { return direct_ && !mass_now_; }  // this iteration solves with the factor
   bool has_factor() const { return direct_; }             // the direct solver is set up (analysed)
+  bool supernodal() const { return direct_ && factor_.supernodal(); }  // its factor's method
   bool mass_iteration() const { return mass_now_; }      // this iteration solves with M
   bool mass_run() const { return mass_run_; }                // the run starts its steps with M
   // The identity of the matrix the solves use, for the contact problem's kept columns: 0 for

@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "solver/forces/tangent.hpp"
@@ -120,14 +122,14 @@ TEST(CholmodFactor, ReportsIndefiniteAndRecovers) {
 
 // CHOLMOD allocates temporaries in every numeric factorization; after analyze() they come from
 // the recycling allocator (cholmod_factor.hpp), not the heap. Also after a failed
-// factorization, and with two factors alive at once. The simplicial method only, the one the
-// implicit scheme uses: the supernodal one (benchmarks only) does allocate here (measured 1852
-// heap allocations over these three rounds), which was not investigated further.
+// factorization, and with two factors alive at once. Both methods: the supernodal one made
+// 1852 heap allocations over these three rounds while CHOLMOD's OpenMP regions ran threaded
+// (libgomp's team), none since they run serially.
 TEST(CholmodFactor, FactorizeAndSolveDoNotAllocate) {
   const RowMajor a = iteration_matrix(ElementKind::q4_full, 1e-8, 30, 10);
   const RowMajor a2 = iteration_matrix(ElementKind::t3, 1e-8, 12, 5);
-  {
-    const Method m = Method::simplicial;
+  for (Method m : {Method::simplicial, Method::supernodal}) {
+    SCOPED_TRACE(method_name(m));
     CholmodFactor f, g;
     f.analyze(a, m);
     g.analyze(a2, m);
@@ -147,6 +149,34 @@ TEST(CholmodFactor, FactorizeAndSolveDoNotAllocate) {
     EXPECT_GT(x.norm(), 0.0);
     EXPECT_GT(x2.norm(), 0.0);
   }
+}
+
+TEST(CholmodFactor, AutomaticMethodIsSupernodalOnlyForLargeFactorsWithAnOptimizedBlas) {
+  // Method::automatic: CHOLMOD's analysis decides with supernodal_switch =
+  // kSupernodalFlopsPerEntry, and only where OpenBLAS is the process's BLAS (ci/setup installs
+  // it); with the reference BLAS the supernodal method gained nothing (docs/implicit.md).
+  std::printf("[cholmod] optimized BLAS (OpenBLAS): %s\n", CholmodFactor::optimized_blas() ? "yes" : "no");
+  const RowMajor small = iteration_matrix(ElementKind::q4_full, 1e-8, 12, 4);
+  const RowMajor large = iteration_matrix(ElementKind::q4_full, 1e-8, 240, 60);
+  for (const RowMajor* a : {&small, &large}) {
+    CholmodFactor probe;
+    probe.analyze(*a, Method::simplicial);
+    const double per_entry = probe.factor_flops() / probe.factor_nonzeros();
+    CholmodFactor f;
+    f.analyze(*a, Method::automatic);
+    SCOPED_TRACE("flops per entry of L: " + std::to_string(per_entry));
+    EXPECT_EQ(f.supernodal(), CholmodFactor::optimized_blas() && per_entry >= CholmodFactor::kSupernodalFlopsPerEntry);
+    ASSERT_TRUE(f.factorize(a->valuePtr()));
+    const Eigen::VectorXd b = rhs(static_cast<int>(a->rows()));
+    Eigen::VectorXd x;
+    f.solve(b, x);
+    EXPECT_LE((*a * x - b).norm(), 1e-13 * a->norm() * x.norm());  // backward error at round-off
+  }
+  CholmodFactor s, t;
+  s.analyze(small, Method::supernodal);
+  t.analyze(small, Method::simplicial);
+  EXPECT_TRUE(s.supernodal());
+  EXPECT_FALSE(t.supernodal());
 }
 
 }  // namespace
