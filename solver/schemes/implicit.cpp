@@ -290,8 +290,8 @@ bool ImplicitIntegratorT<M>::step(bool with_energy, const StressTracking* stress
 // Predictor: where the step resolves the dynamics (dt <= critical_dt), quadratic extrapolation of
 // the velocity, v1 = 3 v0 - 3 v_{-1} + v_{-2} (linear, 2 v0 - v_{-1}, at the second step; on the
 // oblique plate's M2 at 1e-6 s it starts Newton 8x closer than the linear one); otherwise (and at
-// the first step) v1 = v0; `hold` keeps u1 = u0 (the fallbacks of step()). A contact that ended the last step with a reaction is predicted to stay closed: its slave node's
-// normal velocity is set so that the stencil's gap does not change over the step (position
+// the first step) v1 = v0; `hold` keeps u1 = u0 (the fallbacks of step()). A contact that ended
+// the last step with a reaction is predicted to stay closed: its slave node's normal velocity is set so that the stencil's gap does not change over the step (position
 // level: n . sum_j coef_j ((1 - theta) v0_j + theta v1_j) = 0) or its normal relative velocity
 // is zero (velocity level). The trapezoidal rule alternates a closed contact's normal velocity
 // (v1_n = -v0_n on a fixed obstacle), which extrapolation predicts with the wrong sign: on the
@@ -375,15 +375,9 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     }
     system_.count_iteration();
     const double r_before = r;
-    if (system_.mass_iteration()) {
-      // M^-1 of the residual without the contact reactions, in one pass (as solve() would).
-      PhaseTimer timer(phases_.solve);
-      dv_free_ = (-(g_ + dt * condensed_.impulse())).cwiseProduct(system_.inverse_diagonal());
-    } else {
-      rhs_ = -(g_ + dt * condensed_.impulse());  // the residual without the contact reactions
-      dv_free_.setZero();
-      if (!solve(rhs_, dv_free_)) return false;
-    }
+    rhs_ = -(g_ + dt * condensed_.impulse());  // the residual without the contact reactions
+    dv_free_.setZero();
+    if (!solve(rhs_, dv_free_)) return false;
     if (!contact_.candidates.empty()) {
       // The contact problem's own time: its wall time less that of the solves it makes.
       const double solve_before = phases_.solve;

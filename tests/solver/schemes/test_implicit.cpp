@@ -403,6 +403,23 @@ TEST(Implicit, NewtonWithAReusedFactorMatchesFullNewton) {
   }
 }
 
+// The direct solver with refactorization cap `cap` (0: automatic) and 25 Newton iterations, and
+// the assembly and factorization of the slab's iteration matrix at rest at its critical step.
+ImplicitSettings direct_with_cap(int cap) {
+  ImplicitSettings im;
+  im.linear_solver = LinearSolverKind::direct;
+  im.refactor_iterations = cap;
+  im.max_newton_iterations = 25;
+  return im;
+}
+bool factorize_at_rest(const Model<2>& model, ImplicitSystem& system) {
+  const double h = model.critical_dt;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());
+  assemble_system(model, u.data(), model.initial_velocity.data(), 1.0, 0.25 * h * h, 0.5 * h, system.matrix(),
+                  f.data(), false);
+  return system.prepare();
+}
+
 TEST(Implicit, AutomaticRefactorizationHasNoCapOfItsOwn) {
   // Automatic (refactor_iterations = 0): the factor is kept while Newton contracts fast, however
   // many iterations it has served (docs/implicit.md, "Modified Newton"); a cap the case sets
@@ -411,17 +428,9 @@ TEST(Implicit, AutomaticRefactorizationHasNoCapOfItsOwn) {
   // the factor through 12 iterations, a cap of 6 asks for a new one after the 6th.
   const Model<2> model = vibrating_slab(1.0, 0.2);
   for (int cap : {0, 6}) {
-    ImplicitSettings im;
-    im.linear_solver = LinearSolverKind::direct;
-    im.refactor_iterations = cap;
-    im.max_newton_iterations = 25;
-    ImplicitSystem system(make_system_matrix(model), model.mass, {}, im, 1.0);
-    const double h = model.critical_dt;
-    Eigen::VectorXd u = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());
+    ImplicitSystem system(make_system_matrix(model), model.mass, {}, direct_with_cap(cap), 1.0);
     ASSERT_TRUE(system.needs_matrix());
-    assemble_system(model, u.data(), model.initial_velocity.data(), 1.0, 0.25 * h * h, 0.5 * h, system.matrix(),
-                    f.data(), false);
-    ASSERT_TRUE(system.prepare());
+    ASSERT_TRUE(factorize_at_rest(model, system));
     system.begin_step();
     double r = 1e-2;
     for (int it = 1; it <= 12; ++it, r *= 0.4) {
@@ -459,19 +468,9 @@ TEST(Implicit, AutomaticCapRefactorizesBeforeNewtonRunsOut) {
   // refactorizes.
   const Model<2> model = vibrating_slab(1.0, 0.2);
   for (int cap : {0, 6}) {
-    ImplicitSettings im;
-    im.linear_solver = LinearSolverKind::direct;
-    im.refactor_iterations = cap;
-    im.max_newton_iterations = 25;
-    ImplicitSystem system(make_system_matrix(model), model.mass, {}, im, 1.0);
-    const double h = model.critical_dt;
-    Eigen::VectorXd u = Eigen::VectorXd::Zero(model.num_dofs()), f(model.num_dofs());
+    ImplicitSystem system(make_system_matrix(model), model.mass, {}, direct_with_cap(cap), 1.0);
     auto after = [&](double r, double r_before, int iteration) {
-      if (system.needs_matrix()) {
-        assemble_system(model, u.data(), model.initial_velocity.data(), 1.0, 0.25 * h * h, 0.5 * h, system.matrix(),
-                        f.data(), false);
-        EXPECT_TRUE(system.prepare());
-      }
+      if (system.needs_matrix()) EXPECT_TRUE(factorize_at_rest(model, system));
       EXPECT_FALSE(system.needs_matrix());
       system.begin_step();
       system.count_iteration();
@@ -511,6 +510,49 @@ TEST(Implicit, APredictorThatInvertsAnElementIsReplacedByOneThatHoldsThePosition
     ASSERT_TRUE(integrator.step(false)) << integrator.failure();
     EXPECT_GT(integrator.state().forces.min_jacobian, 0.5);
     EXPECT_LE(integrator.residuals().back(), im.newton_tolerance);
+  }
+}
+
+TEST(Implicit, AStepsStressesAreThoseOfTheStateItEndsIn) {
+  // step(with_energy, stress) takes the stress peaks, energies and sampled maxima from the force
+  // pass of the Newton iterate that converges when it predicts which one that is, else from one
+  // pass more: either way they must be a pass's at the new state (u_n+1, v_n+1), not an earlier
+  // iterate's. Mass iteration (dt below the explicit limit, 3-4 iterates a step) and direct
+  // solver, with and without a sample, compared with a pass of their own at the state.
+  const Model<2> model = vibrating_slab(1.0, 0.2);
+  std::vector<std::uint8_t> boundary(static_cast<std::size_t>(model.num_cells()), 0);
+  StressTracking plain;
+  plain.contact_cell = boundary.data();
+  plain.measure = StressMeasure::pk2;
+  VonMises2 sampled_by_step{0.0, 0.0, 0.0}, sampled_fresh{0.0, 0.0, 0.0};
+  StressTracking sample = plain;
+  for (LinearSolverKind solver : {LinearSolverKind::automatic, LinearSolverKind::direct}) {
+    SCOPED_TRACE(solver == LinearSolverKind::direct ? "direct" : "automatic (mass iteration)");
+    RunSettings s;
+    s.dt = 0.25 * model.critical_dt;
+    s.end_time = 40 * s.dt;
+    ImplicitSettings im;
+    im.linear_solver = solver;
+    ImplicitIntegrator integrator(model, s, im);
+    Eigen::VectorXd f(model.num_dofs());
+    for (int n = 0; n < 40; ++n) {
+      const bool sampling = n % 3 == 0;
+      sampled_by_step = VonMises2{0.0, 0.0, 0.0};
+      sample.sampled_max = &sampled_by_step;
+      ASSERT_TRUE(integrator.step(n % 5 == 0, sampling ? &sample : &plain)) << integrator.failure();
+      const State& st = integrator.state();
+      sampled_fresh = VonMises2{0.0, 0.0, 0.0};
+      StressTracking fresh_tracking = sampling ? sample : plain;
+      fresh_tracking.sampled_max = sampling ? &sampled_fresh : nullptr;
+      const ForceTotals fresh =
+          internal_forces(model, st.u.data(), st.v_half.data(), f.data(), n % 5 == 0, &fresh_tracking);
+      EXPECT_EQ(st.forces.stress.all, fresh.stress.all) << "step " << n;
+      EXPECT_EQ(st.forces.stress.all_cell, fresh.stress.all_cell) << "step " << n;
+      EXPECT_EQ(st.forces.stress.interior, fresh.stress.interior) << "step " << n;
+      if (n % 5 == 0) EXPECT_EQ(st.forces.strain_energy, fresh.strain_energy) << "step " << n;
+      if (sampling)
+        for (std::size_t k = 0; k < sampled_fresh.size(); ++k) EXPECT_EQ(sampled_by_step[k], sampled_fresh[k]) << "step " << n;
+    }
   }
 }
 
