@@ -425,6 +425,7 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of="", cost="wall_s
     s.files = files
     s.runs = [r.id for r in drawn]
     s.sources = [sweep.dir]
+    s.series = {name: sum(1 for r in drawn if series[r.id] == name) for name in names}
     # table of the points
     rows = []
     fronts = {}

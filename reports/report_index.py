@@ -9,7 +9,7 @@ from report_layout import LayoutError, read_study_toml
 from report_render import CSS
 from report_study import read_study_json, study_folder
 
-STATUS_CLASS = {"passed": "ok", "gates failed": "bad", "failed": "bad"}
+STATUS_CLASS = {"passed": "ok", "gates failed": "bad", "failed": "bad", "skipped": "bad"}
 
 
 def studies(out):
@@ -72,11 +72,13 @@ def write_index(out, now=""):
         ok, bad = gate_counts(sj)
         status = sj.get("status", "unknown")
         n = run_counts(sj)
+        note = (f"<br><small>{html.escape(str(sj.get('reason')))}</small>"
+                if status == "skipped" and sj.get("reason") else "")
         h.append(f'<tr id="study-{html.escape(name)}"><td>{cell}<br><code>{html.escape(name)}'
                  f"</code></td><td>{html.escape(sj.get('summary', ''))}</td>"
                  f"<td>{html.escape(str(sj.get('tier', '?')))}</td><td>{ok}</td>"
                  f'<td class="{"bad" if bad else "nw"}">{bad}</td>'
-                 f'<td class="{STATUS_CLASS.get(status, "")}">{html.escape(status)}</td>'
+                 f'<td class="{STATUS_CLASS.get(status, "")}">{html.escape(status)}{note}</td>'
                  f"<td>{n['reused']} / {n['run_now']} / {n['failed']}</td></tr>")
     h.append("</tbody></table></body></html>")
     path = os.path.join(out, "index.html")

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "harness/external/external_run.hpp"
 #include "harness/input/case_setup.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/outputs/run_outputs.hpp"
@@ -56,6 +57,7 @@ int run_command(const RunCommand& c) {
   if (const std::string problem = output_folder_problem(out_dir); !problem.empty())
     throw InputError("ricochet run: " + std::string(c.out_dir.empty() ? "output folder " : "--out ") + out_dir + ": " + problem);
   const PreparedCase pc = prepare_case(spec);
+  if (spec.scheme == Scheme::external) return run_external(pc, out_dir, c.quiet);
 
   ProgressLine progress(!c.quiet);
   const RunResult r = run_case(pc, [&progress](long s, long n, double t) { progress(s, n, t); });

@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -414,7 +416,66 @@ ObstacleSpec read_obstacle3(const TableReader& t, int index, const toml::node* r
   return o;
 }
 
+// A name of the run's scheme in summary.json: letters, digits, '_', '-', '.' (not first).
+bool scheme_label_ok(const std::string& s) {
+  if (s.empty() || s.size() > 64 || s[0] == '.' || s[0] == '-') return false;
+  return std::all_of(s.begin(), s.end(), [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.';
+  });
+}
+
+// The shipped adapters: adapters/<name>.py in the adapters folder, by name.
+std::vector<std::string> shipped_adapters() {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(shipped_adapters_dir(), ec))
+    if (e.path().extension() == ".py" && e.path().stem().string().find('_') != 0) names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// [external] (docs/peers.md).
+ExternalSpec read_external(const TableReader& t) {
+  ExternalSpec e;
+  const bool has_adapter = t.has("adapter"), has_command = t.has("command");
+  if (has_adapter && has_command)
+    t.fail("command", "give either external.adapter (a shipped adapter) or external.command (your own), not both");
+  if (!has_adapter && !has_command)
+    t.fail("adapter", "missing: a shipped adapter's name (external.adapter) or your adapter's argv (external.command = [...]); docs/peers.md");
+  if (has_adapter) {
+    e.adapter = t.text("adapter");
+    const std::vector<std::string> names = shipped_adapters();
+    if (std::find(names.begin(), names.end(), e.adapter) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      t.fail("adapter", "no shipped adapter \"" + e.adapter + "\"" + did_you_mean(e.adapter, names) +
+                            "; shipped (" + shipped_adapters_dir().string() + "): " + (list.empty() ? "none" : list) +
+                            "; or give your own as external.command");
+    }
+  } else {
+    e.command = t.texts("command");
+    if (e.command.empty()) t.fail("command", "expected a non-empty array of strings: the adapter program and its first arguments");
+    for (const std::string& arg : e.command)
+      for (std::size_t at = arg.find('{'); at != std::string::npos; at = arg.find('{', at + 1)) {
+        if (arg.compare(at, 2, "{{") == 0) { ++at; continue; }
+        const std::size_t end = arg.find('}', at);
+        const std::string ph = arg.substr(at, end == std::string::npos ? std::string::npos : end - at + 1);
+        if (ph != "{python}" && ph != "{adapters}" && ph != "{case_dir}")
+          t.fail("command", "unknown placeholder \"" + ph + "\" in \"" + arg + "\"; allowed: {python}, {adapters}, {case_dir} ({{ for a literal {)");
+      }
+  }
+  e.timeout = t.number("timeout", 3600.0, Range{0.0, 1e7, true, false});
+  e.options_json = t.table_as_json("options");
+  t.finish();
+  return e;
+}
+
 }  // namespace
+
+std::filesystem::path shipped_adapters_dir() {
+  const char* dir = std::getenv("RICOCHET_ADAPTERS");
+  return dir && *dir ? std::filesystem::path(dir) : std::filesystem::path(RICOCHET_ADAPTERS_DIR);
+}
 
 static CaseSpec read_case_document(toml::table doc, const std::string& file,
                                    const std::vector<std::string>& overrides) {
@@ -427,7 +488,21 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   const TableReader root(doc, "", ctx);
   c.name = root.text("name", std::filesystem::path(file).stem().string());
   c.description = root.text("description", "");
-  c.scheme = scheme_from_name(root.choice("scheme", "explicit", {"explicit", "semi_explicit", "implicit", "explicit_penalty"}));
+  // One of ricochet's own schemes, or the name of an external one (docs/peers.md), which then
+  // needs an [external] table (below).
+  const std::string scheme_text = root.text("scheme", "explicit");
+  const std::vector<std::string> own_schemes = {"explicit", "semi_explicit", "implicit", "explicit_penalty"};
+  if (std::find(own_schemes.begin(), own_schemes.end(), scheme_text) != own_schemes.end()) {
+    c.scheme = scheme_from_name(scheme_text);
+  } else {
+    if (!root.has("external"))
+      root.fail("scheme", "\"" + scheme_text + "\" is not one of ricochet's schemes" + did_you_mean(scheme_text, own_schemes) +
+                              "; allowed: explicit, semi_explicit, implicit, explicit_penalty, or the name of an external "
+                              "scheme given with an [external] table (docs/peers.md)");
+    if (!scheme_label_ok(scheme_text))
+      root.fail("scheme", "\"" + scheme_text + "\": an external scheme's name has letters, digits, '_', '-', '.' (not first), at most 64 characters");
+    c.scheme = Scheme::external;
+  }
   c.default_mesh = root.text("mesh", "");
   c.threads = static_cast<int>(root.integer("threads", 0, 0, kMaxThreads));
   c.adapt_threads = root.boolean("adapt_threads", true);
@@ -552,6 +627,13 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
   if ((!c.obstacles.empty() || !c.contact_pairs.empty()) && c.scheme == Scheme::plain_explicit)
     root.fail("scheme", "\"explicit\" has no contact algorithm; cases with [[obstacles]] or [[contact_pairs]] need "
                         "\"semi_explicit\", \"implicit\" or \"explicit_penalty\"");
+  if (const auto ext = root.table("external")) {
+    if (c.scheme != Scheme::external)
+      root.fail("external", std::string("applies to external schemes (a scheme named other than ricochet's own); this case's scheme is \"") +
+                                scheme_name(c.scheme) + "\", one of ricochet's own");
+    c.external = read_external(*ext);
+    c.external.name = scheme_text;
+  }
   if (const auto ct = root.table("contact")) {
     c.contact.level = ct->choice("level", "position", {"position", "velocity"}) == "position"
                           ? ContactLevel::position
@@ -692,6 +774,7 @@ const char* scheme_name(Scheme s) {
     case Scheme::semi_explicit: return "semi_explicit";
     case Scheme::implicit: return "implicit";
     case Scheme::explicit_penalty: return "explicit_penalty";
+    case Scheme::external: return "external";
     case Scheme::plain_explicit: break;
   }
   return "explicit";
@@ -701,6 +784,7 @@ Scheme scheme_from_name(const std::string& name) {
   if (name == "semi_explicit") return Scheme::semi_explicit;
   if (name == "implicit") return Scheme::implicit;
   if (name == "explicit_penalty") return Scheme::explicit_penalty;
+  if (name == "external") return Scheme::external;
   return Scheme::plain_explicit;
 }
 

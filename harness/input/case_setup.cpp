@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <stdexcept>
 #include <utility>
 
 #include <Eigen/Geometry>
@@ -641,6 +642,8 @@ PreparedCase prepare_case(const CaseSpec& spec) {
 }
 
 RunResult run_case(const PreparedCase& pc, const ProgressFn& progress) {
+  if (pc.spec.scheme == Scheme::external)
+    throw std::logic_error("run_case: an external scheme runs through run_external (harness/external/external_run.hpp)");
   return with_model(pc, [&](const auto& model) {
     return pc.spec.scheme == Scheme::implicit ? run_implicit(model, pc.settings, pc.spec.implicit, progress)
                                               : run_explicit(model, pc.settings, progress);

@@ -27,9 +27,11 @@ enum class Scheme {
   semi_explicit,     // "semi_explicit": central differences, bi-potential contact (the paper's)
   implicit,          // "implicit": the first-order theta-scheme
   explicit_penalty,  // "explicit_penalty": central differences, penalty springs
+  external,          // any other name, with [external]: an external code through an adapter (docs/peers.md)
 };
 
-// The case-file name of a scheme: "explicit", "semi_explicit", "implicit", "explicit_penalty".
+// The case-file name of a scheme: "explicit", "semi_explicit", "implicit", "explicit_penalty",
+// "external".
 const char* scheme_name(Scheme s);
 
 // The scheme of a case-file name; the reader has checked it is one of the four.
@@ -157,6 +159,17 @@ struct ContactPairSpec {
   std::string where;
 };
 
+// [external]: the adapter that runs an external code on the case (a `scheme` named other than
+// ricochet's own; docs/peers.md). The command's placeholders ({python}, {adapters}, {case_dir}) are resolved
+// when the run starts (harness/external/external_run.hpp).
+struct ExternalSpec {
+  std::string adapter;               // a shipped adapter's name (adapters/<name>.py); empty with `command`
+  std::vector<std::string> command;  // the program and its first arguments; empty with `adapter`
+  std::string name;                  // the case's `scheme`: the run's scheme name in summary.json
+  double timeout = 3600.0;           // wall-clock limit [s]
+  std::string options_json = "{}";   // external.options as a JSON object, handed over as it is
+};
+
 // [limits]: ceilings on what a run may plan, checked before it starts (harness/input/run_plan.hpp,
 // docs/reliability.md). They guard against a typo in time.end, time.dt or a mesh size turning
 // into a run of years or an allocation of terabytes; each can be raised.
@@ -196,6 +209,7 @@ struct CaseSpec {
   ContactSettings contact;
   ImplicitSettings implicit;
   PenaltySettings penalty;
+  ExternalSpec external;  // scheme = "external" only
 
   double end_time = 0.0;          // [s]
   std::optional<double> dt;       // [s]; absent = automatic
@@ -218,6 +232,9 @@ struct CaseSpec {
   bool adapt_threads = true;  // fewer threads while other processes hold the cores (threads.hpp)
   RunLimits limits;
 };
+
+// The folder of the shipped adapters (adapters/ of the source tree; $RICOCHET_ADAPTERS if set).
+std::filesystem::path shipped_adapters_dir();
 
 // Parses FILE, applies the --set overrides ("key=value", TOML value syntax, or a bare word
 // taken as a string), validates everything and returns the typed case. Throws InputError.

@@ -3,6 +3,7 @@
 #include "harness/input/suggest.hpp"
 
 #include <cmath>
+#include <functional>
 #include <cstdint>
 #include <optional>
 #include <filesystem>
@@ -194,6 +195,28 @@ std::vector<std::string> TableReader::texts(std::string_view key) const {
   for (const std::string& s : out)
     if (s.empty()) fail(key, "expected " + allowed + "; got an empty string");
   return out;
+}
+
+std::string TableReader::table_as_json(std::string_view key) const {
+  read_.insert(std::string(key));
+  const toml::node* n = find(key);
+  if (!n) return "{}";
+  const toml::table* t = n->as_table();
+  if (!t) fail(key, "expected a table; got " + show(*n));
+  // JSON has no infinities or NaN: refuse them here rather than hand on what cannot be read.
+  std::string bad;
+  std::function<void(const toml::node&)> walk = [&](const toml::node& v) {
+    if (const auto* f = v.as_floating_point(); f && !std::isfinite(f->get())) bad = "a non-finite number";
+    if (const auto* a = v.as_array())
+      for (const toml::node& e : *a) walk(e);
+    if (const auto* sub = v.as_table())
+      for (auto&& [k, e] : *sub) walk(e);
+  };
+  walk(*t);
+  if (!bad.empty()) fail(key, "holds " + bad + "; its values are handed on as JSON, which has none");
+  std::ostringstream os;
+  os << toml::json_formatter{*t, toml::format_flags::none};
+  return os.str();
 }
 
 bool TableReader::boolean(std::string_view key, bool fallback) const {

@@ -82,6 +82,10 @@ class TableReader {
   std::optional<TableReader> table(std::string_view key) const;
   std::vector<TableReader> tables(std::string_view key) const;  // array of tables; empty if absent
   std::vector<std::string> keys() const;  // all keys of this table (marks none as read)
+  // A table taken as it is, whatever it holds, as a JSON object's text ("{}" if absent); for
+  // tables whose keys the harness hands on unread (external.options). Non-finite numbers are
+  // refused (JSON has none).
+  std::string table_as_json(std::string_view key) const;
 
   // Throws for the first key that no accessor asked for.
   void finish() const;

@@ -177,6 +177,22 @@ Json case_identity(const PreparedCase& pc) {
   return j;
 }
 
+Json probes_json(const PreparedCase& pc) {
+  Json probes = Json::array();
+  for (const auto& p : pc.probes) {
+    Json q = Json::object();
+    q["name"] = p.name;
+    q["body"] = p.body;
+    q["node"] = p.node;
+    q["x"] = p.position.x();
+    q["y"] = p.position.y();
+    if (pc.dimension() == 3) q["z"] = p.position.z();
+    q["distance"] = p.distance;
+    probes.push_back(q);
+  }
+  return probes;
+}
+
 Json run_summary(const PreparedCase& pc, const RunResult& r) {
   const CaseSpec& c = pc.spec;
   Json j = case_identity(pc);
@@ -371,6 +387,13 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
       keys.insert(keys.end(), {"momentum_z", "angular_momentum_x", "angular_momentum_y", "angular_momentum_z"});
     keys.push_back("contact_work_normal");
     for (const char* k : keys) fin[k] = h.at(last, h.column(k));
+    // Each probe's displacement at the end (the external schemes' summaries have it too).
+    for (const auto& p : pc.probes)
+      for (const char* a : {"x", "y", "z"}) {
+        if (*a == 'z' && c.dimension == 2) continue;
+        const std::string col = p.name + "_u" + a;
+        fin[col] = h.at(last, h.column(col));
+      }
     j["final"] = fin;
     // Rebound velocity: the final linear momentum over the total mass [m/s].
     const bool massive = r.total_mass > 0.0;
@@ -379,19 +402,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     if (c.dimension == 3)
       j["rebound_velocity_z"] = massive ? Json(h.at(last, h.column("momentum_z")) / r.total_mass) : Json();
   }
-  Json probes = Json::array();
-  for (const auto& p : pc.probes) {
-    Json q = Json::object();
-    q["name"] = p.name;
-    q["body"] = p.body;
-    q["node"] = p.node;
-    q["x"] = p.position.x();
-    q["y"] = p.position.y();
-    if (c.dimension == 3) q["z"] = p.position.z();
-    q["distance"] = p.distance;
-    probes.push_back(q);
-  }
-  j["probes"] = probes;
+  j["probes"] = probes_json(pc);
   j["history_rows"] = static_cast<long>(h.rows());
   j["field_files"] = static_cast<long>(r.fields.size());
   j["build"] = build_info();

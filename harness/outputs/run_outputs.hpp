@@ -18,6 +18,8 @@ Json case_identity(const PreparedCase& pc);
 // The bodies' mesh names (or element formulations) joined by "+": "M1" for one body.
 std::string joined_bodies(const CaseSpec& c, bool element);
 Json run_summary(const PreparedCase& pc, const RunResult& r);
+// summary.json's `probes`: each probe's name, body, node and reference position.
+Json probes_json(const PreparedCase& pc);
 
 // {compiler, build_type} of this program, and the current UTC time (ISO 8601): what every
 // written result records about how it was obtained.

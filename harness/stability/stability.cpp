@@ -291,6 +291,9 @@ int run_command(const StabilityCommand& c) {
 
   CaseSpec spec = read_case(c.case_file, c.sets);
   if (c.threads) spec.threads = *c.threads;
+  if (spec.scheme == Scheme::external)
+    throw InputError(c.case_file + ": scheme: \"" + spec.external.name + "\" is an external scheme; the stability "
+                     "search runs ricochet's own schemes: sweep the external scheme's time step instead (docs/peers.md)");
   const PreparedCase pc = prepare_case(spec);
 
   namespace fs = std::filesystem;

@@ -84,7 +84,7 @@ int run_command(const ReproduceCommand& c, std::ostream& out, std::ostream& err)
   const std::vector<PreparedStudy> studies = prepare(c);
 
   const auto start = std::chrono::steady_clock::now();
-  int passed = 0, gates_failed = 0, failed = 0, report_failures = 0, drawn = 0;
+  int passed = 0, gates_failed = 0, failed = 0, skipped = 0, report_failures = 0, drawn = 0;
   for (const PreparedStudy& s : studies) {
     StudyRunOptions opt;
     opt.out = root / s.spec.name;
@@ -92,6 +92,11 @@ int run_command(const ReproduceCommand& c, std::ostream& out, std::ostream& err)
     opt.quiet = c.quiet;
     StudyOutcome o;
     try {
+      if (const std::vector<std::string> missing = missing_requirements(s.spec); !missing.empty()) {
+        skip_study(s, opt, missing, out);
+        ++skipped;
+        continue;
+      }
       o = run_study(s, opt, out, err);
     } catch (const std::exception& e) {
       out << "study " << s.spec.name << ": failed: " << one_line(e.what()) << std::endl;
@@ -117,7 +122,7 @@ int run_command(const ReproduceCommand& c, std::ostream& out, std::ostream& err)
   }
   if (!c.no_report) {
     std::error_code ec;
-    if (!c.force && drawn == 0 && report_failures == 0 && fs::is_regular_file(root / "index.html", ec)) {
+    if (!c.force && drawn == 0 && skipped == 0 && report_failures == 0 && fs::is_regular_file(root / "index.html", ec)) {
       out << "report index: reused -> " << (root / "index.html").string() << std::endl;
     } else if (const std::string why = make_report({"--index", root.string()}, c.quiet, out, err); why.empty()) {
       out << "report index: drawn -> " << (root / "index.html").string() << std::endl;
@@ -130,6 +135,7 @@ int run_command(const ReproduceCommand& c, std::ostream& out, std::ostream& err)
   std::snprintf(secs, sizeof secs, "%.1f", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   out << "reproduce " << c.tier << ": " << studies.size() << (studies.size() == 1 ? " study: " : " studies: ") << passed
       << " passed, " << gates_failed << " gates failed, " << failed << " failed";
+  if (skipped) out << ", " << skipped << " skipped";
   if (report_failures) out << "; " << report_failures << " report(s) failed";
   out << " in " << secs << " s -> " << root.string() << std::endl;
   if (failed || report_failures) return 1;

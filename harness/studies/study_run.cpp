@@ -1,6 +1,10 @@
 #include "harness/studies/study_run.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <ostream>
 #include <sstream>
@@ -9,7 +13,9 @@
 #include "harness/outputs/atomic_file.hpp"
 #include "harness/outputs/csv_reader.hpp"
 #include "harness/outputs/run_outputs.hpp"
+#include "harness/studies/study_placeholders.hpp"
 #include "harness/studies/study_post.hpp"
+#include "harness/sweeps/sweep_slurm.hpp"
 #include "harness/sweeps/sweep.hpp"
 
 namespace ricochet {
@@ -133,9 +139,9 @@ PreparedStudy prepare_study(StudySpec spec, const std::string& tier) {
   return p;
 }
 
-StudyOutcome run_study(const PreparedStudy& study, const StudyRunOptions& opt, std::ostream& lines, std::ostream& log) {
+// study.json's keys that say which study ran where.
+Json study_header(const PreparedStudy& study, const StudyRunOptions& opt) {
   const StudySpec& spec = study.spec;
-  const auto start = Clock::now();
   Json j = Json::object();
   j["ricochet_version"] = RICOCHET_VERSION;
   j["study"] = spec.name;
@@ -145,6 +151,59 @@ StudyOutcome run_study(const PreparedStudy& study, const StudyRunOptions& opt, s
   j["study_file"] = spec.file.string();
   j["tier"] = study.tier;
   j["out"] = opt.out.string();
+  return j;
+}
+
+std::vector<std::string> missing_requirements(const StudySpec& spec) {
+  std::vector<std::string> missing;
+  for (const std::string& prog : spec.required_programs) {
+    bool found = false;
+    const char* path = std::getenv("PATH");
+    std::string dirs = path ? path : "";
+    for (std::size_t at = 0; !found && at <= dirs.size();) {
+      const std::size_t end = std::min(dirs.find(':', at), dirs.size());
+      const fs::path dir = dirs.substr(at, end - at);
+      found = !dir.empty() && access((dir / prog).c_str(), X_OK) == 0;
+      at = end + 1;
+    }
+    if (!found) missing.push_back("program " + prog);
+  }
+  for (const std::string& mod : spec.required_python_modules) {
+    ProgramOutput r;
+    try {
+      r = run_program({report_python(), "-c", "import " + mod});
+    } catch (const std::exception&) {
+      r.status = -1;
+    }
+    if (r.status != 0) missing.push_back("Python module " + mod + " (" + report_python() + ")");
+  }
+  return missing;
+}
+
+StudyOutcome skip_study(const PreparedStudy& study, const StudyRunOptions& opt, const std::vector<std::string>& missing,
+                        std::ostream& lines) {
+  const StudySpec& spec = study.spec;
+  std::string what;
+  for (const std::string& m : missing) what += (what.empty() ? "" : ", ") + m;
+  Json j = study_header(study, opt);
+  j["status"] = "skipped";
+  j["reason"] = "missing " + what + " ([requires] of " + spec.file.filename().string() + ")";
+  j["sweeps"] = Json::array();
+  j["post"] = Json::array();
+  j["finished_at"] = utc_now();
+  fs::create_directories(opt.out);
+  write_file_atomic(opt.out / "study.json", dump_json(j));
+  lines << "study " << spec.name << ": skipped (" << j["reason"].get<std::string>() << ")" << std::endl;
+  StudyOutcome out;
+  out.status = "skipped";
+  out.json = std::move(j);
+  return out;
+}
+
+StudyOutcome run_study(const PreparedStudy& study, const StudyRunOptions& opt, std::ostream& lines, std::ostream& log) {
+  const StudySpec& spec = study.spec;
+  const auto start = Clock::now();
+  Json j = study_header(study, opt);
   j["started_at"] = utc_now();
 
   std::string names;

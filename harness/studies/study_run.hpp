@@ -44,8 +44,17 @@ struct StudyRunOptions {
 // What study.json says, and what the report's stamp is made from.
 struct StudyOutcome {
   Json json;
-  std::string status;  // "passed", "gates failed" or "failed"
+  std::string status;  // "passed", "gates failed", "failed" or "skipped"
 };
+
+// What the study's [requires] names and this machine lacks: "program ccx", "Python module
+// getfem"; empty when it has everything.
+std::vector<std::string> missing_requirements(const StudySpec& spec);
+
+// The outcome of a study not run for what it lacks: study.json with status "skipped" and the
+// reason, and one line.
+StudyOutcome skip_study(const PreparedStudy& study, const StudyRunOptions& opt, const std::vector<std::string>& missing,
+                        std::ostream& lines);
 
 // Runs the study: each sweep into <out>/<name> with the entry's repeat, jobs and threads, its
 // gates checked on its summary.csv (JUnit report <out>/<name>/gates-junit.xml); then, unless a

@@ -196,6 +196,18 @@ StudySpec read_study(const fs::path& folder_in) {
     s.posts.push_back(std::move(p));
   }
   if (const auto report = root.table("report")) read_report(*report, *doc.get("report")->as_table(), s);
+  if (const auto req = root.table("requires")) {
+    auto names = [&](const char* key) {
+      std::vector<std::string> v = req->texts(key);
+      for (const std::string& n : v)
+        if (n.find_first_of(" /;'\"\\") != std::string::npos)
+          req->fail(key, "\"" + n + "\": expected a bare name (no path, spaces or quotes)");
+      return v;
+    };
+    s.required_programs = names("programs");
+    s.required_python_modules = names("python_modules");
+    req->finish();
+  }
   root.finish();
   return s;
 }

@@ -45,6 +45,10 @@ struct StudySpec {
   std::vector<StudySweep> sweeps;
   std::vector<StudyPost> posts;
   std::filesystem::path plugin;      // [report] plugin, absolute; empty: none
+  // [requires]: what the study needs besides ricochet (external codes, docs/peers.md); a study
+  // whose requirement is missing is skipped, never passed.
+  std::vector<std::string> required_programs;        // found on PATH
+  std::vector<std::string> required_python_modules;  // importable by the reports' Python
 
   // The sweep entries and post steps of a tier, in file order.
   std::vector<const StudySweep*> sweeps_of(const std::string& tier) const;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "harness/external/external_run.hpp"
 #include "harness/input/case_spec.hpp"
 #include "harness/input/input_error.hpp"
 #include "harness/sweeps/run_identity.hpp"
@@ -134,10 +135,26 @@ SweepPlan::SweepPlan(const SweepSpec& spec, const std::vector<SweepRun>& runs, c
   // file hashed once. A case that cannot be read (check_runs reports it) reads no mesh here.
   std::map<fs::path, Json> hashes;
   mesh_hashes_.resize(runs_.size(), Json::object());
+  adapter_hashes_.resize(runs_.size(), Json());
   for (std::size_t i = 0; i < runs_.size(); ++i) {
     std::vector<fs::path> files;
     try {
-      files = mesh_files(read_case(runs_[i].base.string(), runs_[i].set_args()));
+      const CaseSpec spec = read_case(runs_[i].base.string(), runs_[i].set_args());
+      files = mesh_files(spec);
+      // An external scheme's run is also what its adapter is: an edited adapter reruns it.
+      if (spec.scheme == Scheme::external) {
+        adapter_hashes_[i] = Json::object();
+        for (const std::string& arg : adapter_command(spec)) {
+          std::error_code ec;
+          if (!fs::is_regular_file(arg, ec)) continue;
+          auto it = hashes.find(arg);
+          if (it == hashes.end()) {
+            const std::string h = file_fnv1a(arg);
+            it = hashes.emplace(arg, h.empty() ? Json() : Json(h)).first;
+          }
+          adapter_hashes_[i][arg] = it->second;
+        }
+      }
     } catch (const InputError&) {
     }
     for (const fs::path& f : files) {
@@ -175,6 +192,7 @@ std::string SweepPlan::request(std::size_t i) const {
   j["repeats"] = repeats(i);
   j["meshes_fnv1a"] = mesh_hashes_[i];
   j["program_build"] = build_id_;
+  if (!adapter_hashes_[i].is_null()) j["adapter_fnv1a"] = adapter_hashes_[i];
   if (run.stability) {
     j["kind"] = "stability";
     Json opt = Json::array();

@@ -103,6 +103,9 @@ class SweepPlan {
   std::map<std::string, std::size_t> index_;
   std::map<std::filesystem::path, std::string> base_hash_;  // FNV-1a of each base case's text
   std::vector<Json> mesh_hashes_;  // per run: {mesh file: FNV-1a of its bytes, or null} (run_identity.hpp)
+  // per run: an external scheme's adapter files (the arguments of its command that are files:
+  // the adapter script, the program) with the FNV-1a of their bytes; null for ricochet's schemes
+  std::vector<Json> adapter_hashes_;
   std::string build_id_;           // program_build_id of the program that runs the runs
   std::vector<bool> scope_;                                  // empty: every run
 };

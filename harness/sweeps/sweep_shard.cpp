@@ -158,6 +158,8 @@ std::string difference(const std::string& found, const std::string& expected, co
     if (a == b) continue;
     if (k == "base_fnv1a") return "its base case " + compact_json(at(e, "base")) + " has changed since it ran";
     if (k == "meshes_fnv1a") return "a mesh file of its case has changed since it ran (" + compact_json(a) + " then, " + compact_json(b) + " now)";
+    if (k == "adapter_fnv1a")
+      return "its external scheme's adapter has changed since it ran (" + compact_json(a) + " then, " + compact_json(b) + " now)";
     if (k == "program_build")
       return "another build of the program ran it (" + compact_json(a) + "; this one is " + compact_json(b) + ")";
     if (k == "repeats")
