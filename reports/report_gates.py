@@ -50,10 +50,17 @@ def verdicts(sweep_dir, run_ids, entry):
 def _selected(run, g):
     """Whether gate g looks at the run: its `where`, or for a ratio its numerator or
     denominator row (docs/gates.md)."""
+    def selector(*parts):
+        # A selector without its own `kind` looks at the run whatever its kind.
+        sel = {}
+        for part in parts:
+            sel.update(part)
+        sel.setdefault("kind", run.kind)
+        return sel
     if g.get("kind") == "ratio":
-        return any(matches(run, dict(g.get("where", {}), **g.get(k, {}), kind=run.kind))
+        return any(matches(run, selector(g.get("where", {}), g.get(k, {})))
                    for k in ("numerator", "denominator"))
-    return matches(run, dict(g.get("where", {}), kind=run.kind))
+    return matches(run, selector(g.get("where", {})))
 
 
 class GatedColumns:
