@@ -24,8 +24,10 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 def main():
     ricochet, out = sys.argv[1], pathlib.Path(sys.argv[2])
-    r = subprocess.run([ricochet, "reproduce", "peers", "--tier", "fast", "--out", str(out), "--quiet", "--no-report"],
-                       capture_output=True, text=True, timeout=1800)
+    # From the checkout's root, as ci/test runs it: a run's identity holds its case file's path
+    # as the studies folder gives it (relative to the working folder), so the same folder reuses.
+    r = subprocess.run([ricochet, "reproduce", "peers", "--tier", "fast", "--out", str(out.resolve()), "--quiet",
+                        "--no-report"], capture_output=True, text=True, timeout=1800, cwd=ROOT)
     if "study peers: skipped" in r.stdout:
         print(r.stdout.strip())
         return 77
