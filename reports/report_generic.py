@@ -177,13 +177,14 @@ def gates_line(g):
 # ---------------------------------------------------------------------------------------------
 # Cells
 
-def wall_cell(r):
-    """Median time-loop wall time, with the min–max over the repeats when there are several."""
-    w = r.num("wall_seconds")
+def wall_cell(r, cost="wall_seconds"):
+    """Median time-loop wall time (or the cost column `cost`), with the min–max over the repeats
+    when there are several."""
+    w = r.num(cost)
     if w is None:
         return "–"
     reps = r.num("repeats")
-    lo, hi = r.num("wall_seconds_min"), r.num("wall_seconds_max")
+    lo, hi = r.num(cost + "_min"), r.num(cost + "_max")
     if reps and reps > 1 and lo is not None and hi is not None:
         return f"{fmt_g(w)} ({fmt_g(lo)}–{fmt_g(hi)})"
     return fmt_g(w)
@@ -445,7 +446,7 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of="", cost="wall_s
         if below:
             note.append("below the reference uncertainty")
         note.append("Pareto front" if r.id in fronts else "dominated")
-        rows.append([f"`{r.id}`", series[r.id], r.mesh or "–", dt_cell(r), wall_cell(r),
+        rows.append([f"`{r.id}`", series[r.id], r.mesh or "–", dt_cell(r), wall_cell(r, cost),
                      fmt_g(r.num("repeats")),
                      (f"< {fmt_g(fl)}" if below else fmt_g(e, 4))]
                     + ([fmt_g(fl) if finite(fl) else "–"] if has_floor else [])
@@ -453,13 +454,14 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of="", cost="wall_s
                        else "–"])
     for r, why in skipped:
         rows.append([f"`{r.id}`", scheme_name(r.scheme), r.mesh or "–", dt_cell(r),
-                     wall_cell(r), fmt_g(r.num("repeats")), f"not drawn: {why}"]
+                     wall_cell(r, cost), fmt_g(r.num("repeats")), f"not drawn: {why}"]
                     + (["–"] if has_floor else []) + ["–", f"`{r.get('reference_run')}`"
                                                       if r.get("reference_run") else "–"])
     u = f" [{unit}]" if unit else ""
     s.extra.append((sid + "_data", f"The points of the `{metric}` diagram",
-                    ["run", "series", "mesh", "Δt (s)", "wall time, time loop (s): median "
-                     "(min–max)", "repeats", metric + u]
+                    ["run", "series", "mesh", "Δt (s)",
+                     ("wall time, time loop (s)" if cost == "wall_seconds" else f"{cost} (s)")
+                     + ": median (min–max)", "repeats", metric + u]
                     + ([floor_col + u] if has_floor else [])
                     + ["Pareto", "reference run"], rows))
     # observed order in Δt per series and mesh
@@ -473,9 +475,10 @@ def wp_section(ctx, sweep, Section, metric, sid, stem, title_of="", cost="wall_s
                 orders.append(f"{name}" + (f" on {m}" if len(meshes) > 1 else "") + f" {k:.2f}")
     refs = sorted({r.get("reference_run") for r in drawn} - {""})
     s.caption = (
-        f"`{metric}`{u} ({metric_text(metric)}) against the time-loop wall time "
-        f"(`wall_seconds`; {reps}"
-        + ("; bars: fastest to slowest repeat, `wall_seconds_min`–`wall_seconds_max`"
+        f"`{metric}`{u} ({metric_text(metric)}) against "
+        + ("the time-loop wall time " if cost == "wall_seconds" else "")
+        + f"(`{cost}`; {reps}"
+        + (f"; bars: fastest to slowest repeat, `{cost}_min`–`{cost}_max`"
            if any((r.num("repeats") or 1) > 1 for r in drawn) else "")
         + "), log–log, " + ("one panel per mesh" if len(meshes) > 1 else
                             f"mesh {meshes[0] or '(not recorded)'}")
