@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "harness/outputs/run_outputs.hpp"
 #include "solver/contact/penalty_contact.hpp"
 #include "solver/schemes/threads.hpp"
 
@@ -228,7 +229,7 @@ Json external_case_json(const PreparedCase& pc) {
   j["case_file"] = ec ? c.file : abs.lexically_normal().string();
   j["scheme"] = c.external.name;
   j["dimension"] = c.dimension;
-  j["plane"] = c.dimension == 2 ? Json(c.plane == PlaneMode::stress ? "stress" : "strain") : Json();
+  j["plane"] = c.dimension == 2 ? Json(plane_name(c.plane)) : Json();
   if (c.dimension == 3)
     add_model<3>(j, pc);
   else
@@ -236,15 +237,7 @@ Json external_case_json(const PreparedCase& pc) {
   Json output = Json::object();
   output["interval"] = pc.settings.sample_interval;
   output["stress_measure"] = stress_measure_name(pc.settings.stress_measure);
-  Json probes = Json::array();
-  for (const ProbeInfo& p : pc.probes) {
-    Json q = Json::object();
-    q["name"] = p.name;
-    q["body"] = p.body;
-    q["node"] = p.node;
-    probes.push_back(q);
-  }
-  output["probes"] = probes;
+  output["probes"] = probes_json(pc);
   j["output"] = output;
   j["threads"] = resolve_threads(c.threads);
   j["options"] = parse_json(c.external.options_json);

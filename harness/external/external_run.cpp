@@ -458,9 +458,11 @@ ExternalResult import_external_result(const PreparedCase& pc, const Json& case_j
     if (name == "energy_error" ? error.empty() : h.find(name) == nullptr) continue;
     out.columns.push_back(name);
   }
+  std::vector<const std::vector<double>*> sources;
+  for (const std::string& name : out.columns) sources.push_back(name == "energy_error" ? &error : h.find(name));
   out.rows.reserve(n * out.columns.size());
   for (std::size_t r = 0; r < n; ++r)
-    for (const std::string& name : out.columns) out.rows.push_back(name == "energy_error" ? error[r] : (*h.find(name))[r]);
+    for (const std::vector<double>* v : sources) out.rows.push_back((*v)[r]);
 
   // summary.json: what ricochet's own runs have, where the adapter's files give it.
   Json j = case_identity(pc);
@@ -477,18 +479,8 @@ ExternalResult import_external_result(const PreparedCase& pc, const Json& case_j
   ext["options"] = case_json.at("options");
   ext["translation"] = res.translation;
   j["external"] = ext;
-  j["dimension"] = c.dimension;
-  j["plane"] = c.dimension == 2 ? Json(c.plane == PlaneMode::stress ? "stress" : "strain") : Json();
-  if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
-    j["friction_coeff"] = nullptr;
-  else
-    j["friction_coeff"] = pc.settings.friction.front().front();
-  j["obstacles"] = static_cast<long>(c.obstacles.size());
-  j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
-  with_model(pc, [&](const auto& m) {
-    j["nodes"] = m.num_nodes();
-    j["elements"] = m.num_cells();
-  });
+  add_case_shape(j, pc);
+  add_model_size(j, pc);
   j["dt"] = res.dt;
   j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
   j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();
@@ -596,8 +588,6 @@ int run_external(const PreparedCase& pc, const fs::path& out_dir, bool quiet) {
                   process.wall_seconds, out_dir.string().c_str());
     }
     return r.summary.at("status") == "ok" ? 0 : 3;
-  } catch (const ExternalRunFailure&) {
-    throw;
   } catch (const std::runtime_error& e) {
     throw ExternalRunFailure("external scheme '" + label + "': " + e.what());
   }

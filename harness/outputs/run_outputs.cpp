@@ -16,7 +16,6 @@
 namespace ricochet {
 namespace {
 
-const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
 
 // The arrays of a snapshot (docs/outputs.md, fields/*.vtu), 2D (VtuData) or 3D (VtuData3):
 // the nodes' vectors u, v and contact force, and the per-cell values in the file's cell order.
@@ -138,6 +137,8 @@ std::string format_vtu_snapshot3(const PreparedCase& pc, const FieldSnapshot& f)
 
 }  // namespace
 
+const char* plane_name(PlaneMode p) { return p == PlaneMode::stress ? "stress" : "strain"; }
+
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   char buf[32];
@@ -177,6 +178,26 @@ Json case_identity(const PreparedCase& pc) {
   return j;
 }
 
+void add_case_shape(Json& j, const PreparedCase& pc) {
+  const CaseSpec& c = pc.spec;
+  j["dimension"] = c.dimension;
+  j["plane"] = c.dimension == 2 ? Json(plane_name(c.plane)) : Json();
+  // The friction coefficient of the first body-obstacle pair (null without obstacles).
+  if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
+    j["friction_coeff"] = nullptr;
+  else
+    j["friction_coeff"] = pc.settings.friction.front().front();
+  j["obstacles"] = static_cast<long>(c.obstacles.size());
+  j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
+}
+
+void add_model_size(Json& j, const PreparedCase& pc) {
+  with_model(pc, [&](const auto& m) {
+    j["nodes"] = m.num_nodes();
+    j["elements"] = m.num_cells();
+  });
+}
+
 Json probes_json(const PreparedCase& pc) {
   Json probes = Json::array();
   for (const auto& p : pc.probes) {
@@ -196,15 +217,7 @@ Json probes_json(const PreparedCase& pc) {
 Json run_summary(const PreparedCase& pc, const RunResult& r) {
   const CaseSpec& c = pc.spec;
   Json j = case_identity(pc);
-  j["dimension"] = c.dimension;
-  j["plane"] = c.dimension == 2 ? Json(plane_name(c.plane)) : Json();
-  // The friction coefficient of the first body-obstacle pair (null without obstacles).
-  if (pc.settings.friction.empty() || pc.settings.friction.front().empty())
-    j["friction_coeff"] = nullptr;
-  else
-    j["friction_coeff"] = pc.settings.friction.front().front();
-  j["obstacles"] = static_cast<long>(c.obstacles.size());
-  j["contact_pairs"] = static_cast<long>(pc.settings.body_pairs.size());
+  add_case_shape(j, pc);
   const bool any_contact = !c.obstacles.empty() || !pc.settings.body_pairs.empty();
   j["contact_level"] = !any_contact || pc.spec.scheme == Scheme::explicit_penalty ? Json()
                        : Json(pc.settings.contact.level == ContactLevel::position ? "position" : "velocity");
@@ -214,10 +227,7 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
       ((pc.spec.scheme == Scheme::semi_explicit && pc.settings.contact.level == ContactLevel::position) ||
        pc.spec.scheme == Scheme::implicit))
     j["contact_frame_updates"] = pc.settings.contact.frame_updates;
-  with_model(pc, [&](const auto& m) {
-    j["nodes"] = m.num_nodes();
-    j["elements"] = m.num_cells();
-  });
+  add_model_size(j, pc);
   j["dt"] = r.dt;
   j["dt_mode"] = pc.dt_auto() ? "auto" : "fixed";
   j["dt_safety"] = pc.dt_auto() ? Json(c.dt_safety) : Json();

@@ -18,6 +18,12 @@ Json case_identity(const PreparedCase& pc);
 // The bodies' mesh names (or element formulations) joined by "+": "M1" for one body.
 std::string joined_bodies(const CaseSpec& c, bool element);
 Json run_summary(const PreparedCase& pc, const RunResult& r);
+// plane's name in summary.json and case.json: "stress" or "strain".
+const char* plane_name(PlaneMode p);
+// summary.json's dimension, plane, friction_coeff, obstacles, contact_pairs (in that order).
+void add_case_shape(Json& j, const PreparedCase& pc);
+// summary.json's nodes and elements.
+void add_model_size(Json& j, const PreparedCase& pc);
 // summary.json's `probes`: each probe's name, body, node and reference position.
 Json probes_json(const PreparedCase& pc);
 

@@ -1,10 +1,6 @@
 #include "harness/studies/study_run.hpp"
 
-#include <unistd.h>
-
-#include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <cstdio>
 #include <ostream>
 #include <sstream>
@@ -156,18 +152,8 @@ Json study_header(const PreparedStudy& study, const StudyRunOptions& opt) {
 
 std::vector<std::string> missing_requirements(const StudySpec& spec) {
   std::vector<std::string> missing;
-  for (const std::string& prog : spec.required_programs) {
-    bool found = false;
-    const char* path = std::getenv("PATH");
-    std::string dirs = path ? path : "";
-    for (std::size_t at = 0; !found && at <= dirs.size();) {
-      const std::size_t end = std::min(dirs.find(':', at), dirs.size());
-      const fs::path dir = dirs.substr(at, end - at);
-      found = !dir.empty() && access((dir / prog).c_str(), X_OK) == 0;
-      at = end + 1;
-    }
-    if (!found) missing.push_back("program " + prog);
-  }
+  for (const std::string& prog : spec.required_programs)
+    if (find_on_path(prog).empty()) missing.push_back("program " + prog);
   for (const std::string& mod : spec.required_python_modules) {
     ProgramOutput r;
     try {

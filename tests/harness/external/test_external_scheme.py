@@ -6,13 +6,16 @@
 1. A toy external scheme (adapters/examples/rigid_body.py, the example of docs/peers.md: the
    stand-in for a user's solver) in a study of its own beside ricochet's semi-explicit scheme:
    `ricochet reproduce` runs both, measures both against the same reference, checks a gate on the
-   toy's rows and draws a work-precision figure with a series per scheme.
+   toy's rows (a ratio gate among them, whose selector has its own `kind`) and draws a
+   work-precision figure with a series per scheme, captioned with the cost it plots (CPU time),
+   and a runs table; every summary's `final` has the probe's displacement.
 2. Bad adapters (missing result.json, a truncated table, non-finite values, unknown columns, a
    crash, a signal, a timeout, a program that does not exist, a run that stops early): each is a
    failed run with one line on stderr naming what is wrong, exit 1, and no summary.json or
    history.csv; in a sweep, a failed run beside good ones, and the sweep goes on.
 3. The case keys of [external] refused with one line naming the key.
 4. A study whose [requires] names what the machine lacks is skipped, never passed.
+5. An edited adapter reruns the runs of its external scheme, and only those.
 """
 import csv
 import json
@@ -83,6 +86,13 @@ where = { scheme = "toy" }
 column = "rebound_velocity_y"
 reference = 2.0
 rel_tolerance = 1e-9
+[[gate]]
+name = "the toy costs more than the semi-explicit scheme"
+kind = "ratio"
+column = "cpu_seconds"
+numerator = { scheme = "toy", "time.dt" = 1e-5 }
+denominator = { group = "ours", "time.dt" = 1e-5, kind = "run" }
+floor = 1.0
 """
 
 STUDY = """title = "A toy external scheme"
@@ -97,6 +107,10 @@ kind = "work_precision"
 sweep = "peers"
 error = "error_probe_P"
 cost = "cpu_seconds"
+[[report.section]]
+kind = "runs_table"
+sweep = "peers"
+columns = ["rebound_velocity_y", "cpu_seconds"]
 """
 
 
@@ -133,7 +147,10 @@ class ToyStudy(unittest.TestCase):
         self.assertEqual(self.r.returncode, 0, self.r.stdout + self.r.stderr)
         sj = json.loads((self.out / "toy" / "study.json").read_text())
         results = {g["name"]: g["passed"] for g in sj["sweeps"][0]["gate_results"]}
-        self.assertEqual(results, {"every run finished": True, "the toy bounces back at its impact speed": True})
+        self.assertEqual(results, {"every run finished": True, "the toy bounces back at its impact speed": True,
+                                   "the toy costs more than the semi-explicit scheme": True})
+        # The page is drawn without an error: a ratio gate's selector with its own `kind` among them.
+        self.assertNotIn("Traceback", self.r.stdout + self.r.stderr)
 
     def test_toy_rows_are_measured_against_the_same_reference(self):
         toy = [r for r in self.rows() if r["scheme"] == "toy"]
@@ -151,6 +168,20 @@ class ToyStudy(unittest.TestCase):
             self.assertEqual(r["contact_force_max"], "")
             self.assertEqual(float(r["energy_error_max"]), 0.0)
             self.assertGreater(float(r["cpu_seconds"]), 0.0)
+
+    def test_summaries_end_with_the_probes_displacement(self):
+        for r in self.rows():
+            if r["kind"] == "run":
+                self.assertNotEqual(r["final.P_uy"], "", r["run_id"])
+        toy = [r for r in self.rows() if r["scheme"] == "toy"]
+        # The rigid toy bounces at once: P's last displacement is its rigid travel, up then.
+        self.assertGreater(float(toy[0]["final.P_uy"]), 0.0)
+
+    def test_work_precision_page_names_the_cost_it_plots(self):
+        md = (self.out / "toy" / "report" / "report.md").read_text()
+        self.assertIn("against (`cpu_seconds`;", md)
+        self.assertIn("cpu_seconds (s): median", md)
+        self.assertNotIn("wall time, time loop", md)
 
     def test_work_precision_figure_has_a_series_per_scheme(self):
         manifest = json.loads((self.out / "toy" / "report" / "manifest.json").read_text())
@@ -258,6 +289,34 @@ class BadAdapters(unittest.TestCase):
         self.assertEqual(sorted(r["status"] for r in rows), ["failed", "ok"])
         failed = [r for r in rows if r["status"] == "failed"][0]
         self.assertIn("nonpositive jacobian", failed["reason"])
+
+
+class AdapterIdentity(unittest.TestCase):
+    def test_an_edited_adapter_reruns_its_runs_and_only_them(self):
+        with tempfile.TemporaryDirectory() as d:
+            root = pathlib.Path(d)
+            (root / "disk.toml").write_text(CASE)
+            toy = root / "toy.py"
+            toy.write_text((pathlib.Path(__file__).resolve().parents[3] / "adapters" / "examples" / "rigid_body.py").read_text())
+            (root / "sweep.toml").write_text(textwrap.dedent("""\
+                name = "identity"
+                base = "disk.toml"
+                [[group]]
+                name = "ours"
+                [[group]]
+                name = "toy"
+                set = { scheme = "toy", "external.command" = ["{python}", "{case_dir}/toy.py"] }
+                """))
+
+            def sweep():
+                r = run(["sweep", str(root / "sweep.toml"), "--out", str(root / "out")])
+                self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+                return r.stdout + r.stderr
+
+            self.assertIn("2 runs, 0 done before, 2 to run", sweep())
+            self.assertIn("2 runs, 2 done before, 0 to run", sweep())
+            toy.write_text(toy.read_text() + "\n# edited\n")
+            self.assertIn("2 runs, 1 done before, 1 to run", sweep())
 
 
 class MissingRequirement(unittest.TestCase):
