@@ -79,7 +79,7 @@ void factorize(benchmark::State& state, Solver solver, Ordering ordering, const 
 }
 
 void solve(benchmark::State& state, Solver solver, Ordering ordering, const std::string& mesh,
-           const std::string& dt) {
+           const std::string& dt, bool single) {
   const Matrix& m = iteration_matrix(mesh, dt);
   const auto& a = m.system.matrix;
   Eigen::VectorXd x(a.rows());
@@ -89,10 +89,16 @@ void solve(benchmark::State& state, Solver solver, Ordering ordering, const std:
                                                  : CholmodFactor::Method::simplicial,
             ordering);
   if (!f.factorize(a.valuePtr())) fail(state, "factorization failed");
+  Eigen::VectorXd exact(a.rows());
+  f.solve(m.b, exact);
+  f.use_single(single);
   for (auto _ : state) {
     f.solve(m.b, x);
     benchmark::DoNotOptimize(x.data());
   }
+  // How far the single-precision copy's solution is from the double factor's (0 for double).
+  state.counters["relative_difference"] = (x - exact).norm() / exact.norm();
+  state.counters["factor_bytes"] = single ? f.single_bytes() : f.factor_nonzeros() * (sizeof(double) + sizeof(int));
 }
 
 void pcg_solve(benchmark::State& state, const std::string& mesh, const std::string& dt) {
@@ -144,10 +150,12 @@ void register_all() {
         }
       for (Solver s : {Solver::cholmod_supernodal, Solver::cholmod_simplicial})
         for (Ordering o : {Ordering::amd, Ordering::metis, Ordering::nesdis})
-          if (orderings || o == Ordering::amd)
-            benchmark::RegisterBenchmark(("linear_solve/" + name(s, o) + "/" + cell).c_str(),
-                                         [=](benchmark::State& st) { solve(st, s, o, mesh, dt); })
-                ->Unit(benchmark::kMicrosecond);
+          for (bool single : {false, true})
+            if ((orderings || o == Ordering::amd) && (!single || o == Ordering::amd))
+              benchmark::RegisterBenchmark(
+                  ("linear_solve/" + name(s, o) + (single ? "_single" : "") + "/" + cell).c_str(),
+                  [=](benchmark::State& st) { solve(st, s, o, mesh, dt, single); })
+                  ->Unit(benchmark::kMicrosecond);
       benchmark::RegisterBenchmark(("linear_solve/pcg/" + cell).c_str(),
                                    [=](benchmark::State& st) { pcg_solve(st, mesh, dt); })
           ->Unit(benchmark::kMicrosecond);

@@ -666,6 +666,9 @@ static CaseSpec read_case_document(toml::table doc, const std::string& file,
     c.implicit.mass_anderson_depth = static_cast<int>(
         im->integer("mass_anderson_depth", ImplicitSettings{}.mass_anderson_depth, 0, AndersonMixer::kMaxDepth));
     c.implicit.uzawa_sweeps = static_cast<int>(im->integer("uzawa_sweeps", 30, 0, 100000));
+    c.implicit.factor_precision = im->choice("factor_precision", "double", {"double", "single"}) == "single"
+                                      ? FactorPrecision::single
+                                      : FactorPrecision::double_;
     c.implicit.refactor_contraction =
         im->number("refactor_contraction", ImplicitSettings{}.refactor_contraction, Range{0.0, 1.0, false, true});
     c.implicit.refactor_iterations =

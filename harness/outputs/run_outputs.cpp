@@ -281,7 +281,10 @@ Json run_summary(const PreparedCase& pc, const RunResult& r) {
     im["linear_solver"] = r.implicit.mass_solver ? (r.implicit.direct_solver ? "mass+direct" : "mass")
                           : r.implicit.direct_solver ? "direct"
                                                      : "pcg";
-    if (r.implicit.direct_solver) im["factor_method"] = r.implicit.supernodal ? "supernodal" : "simplicial";
+    if (r.implicit.direct_solver) {
+      im["factor_method"] = r.implicit.supernodal ? "supernodal" : "simplicial";
+      im["solve_precision"] = r.implicit.single_solves ? "single" : "double";
+    }
     im["mass_iterations"] = r.implicit.mass_iterations;
     im["factorizations"] = r.implicit.factorizations;
     im["refactor_iterations"] = r.implicit.refactor_iterations;

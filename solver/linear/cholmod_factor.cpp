@@ -209,7 +209,15 @@ CholmodFactor::~CholmodFactor() {
   delete common_;
 }
 
+void CholmodFactor::use_single(bool on) {
+  use_single_ = on && factor_ != nullptr;
+  if (!use_single_) return;
+  single_.reserve(factor_);
+  single_.copy(factor_);
+}
+
 void CholmodFactor::release() {
+  use_single_ = false;
   if (factor_) cholmod_free_factor(&factor_, common_);
   for (cholmod_dense** d : {&x_, &y_, &e_, &xb_, &yb_, &eb_})
     if (*d) cholmod_free_dense(d, common_);
@@ -286,10 +294,16 @@ bool CholmodFactor::factorize(const double* a_values) {
     for (std::size_t k = 0; k < factor_->xsize; ++k)
       if (!std::isfinite(x[k])) return false;
   }
+  if (use_single_) single_.copy(factor_);
   return true;
 }
 
 void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (use_single_) {
+    x.resize(n_);
+    single_.solve(b.data(), x.data(), 1);
+    return;
+  }
   cholmod_dense rhs{};
   rhs.nrow = static_cast<std::size_t>(n_);
   rhs.ncol = 1;
@@ -306,6 +320,10 @@ void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
 
 void CholmodFactor::solve_block(const double* b, double* x, int ncol) {
   if (ncol < 1 || ncol > kMaxBlock) throw std::invalid_argument("CholmodFactor::solve_block: ncol out of range");
+  if (use_single_) {
+    single_.solve(b, x, ncol);
+    return;
+  }
   cholmod_dense rhs{};
   rhs.nrow = static_cast<std::size_t>(n_);
   rhs.ncol = static_cast<std::size_t>(ncol);

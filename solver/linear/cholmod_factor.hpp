@@ -29,6 +29,8 @@
 
 #include <Eigen/SparseCore>
 
+#include "solver/linear/single_factor.hpp"
+
 struct cholmod_common_struct;
 struct cholmod_factor_struct;
 struct cholmod_dense_struct;
@@ -84,6 +86,13 @@ class CholmodFactor {
   static constexpr int kMaxBlock = 4;
   void solve_block(const double* b, double* x, int ncol);
 
+  // Solves with a single-precision copy of L (single_factor.hpp) instead of CHOLMOD's double
+  // one: on, the copy is made now and after every factorize(); off, CHOLMOD solves. The
+  // factorization itself is always double. Allocates when turned on.
+  void use_single(bool on);
+  bool single() const { return use_single_; }
+  double single_bytes() const { return single_.bytes(); }  // the copy's storage
+
   int size() const { return n_; }
   bool analyzed() const { return factor_ != nullptr; }
   double factor_nonzeros() const;  // entries of L (supernodal: including the zeros of its blocks)
@@ -101,6 +110,8 @@ class CholmodFactor {
   cholmod_dense_struct* xb_ = nullptr;  // the same for solve_block
   cholmod_dense_struct* yb_ = nullptr;
   cholmod_dense_struct* eb_ = nullptr;
+  SingleFactor single_;
+  bool use_single_ = false;
   int n_ = 0;
   long nnz_ = 0;
   const int* outer_ = nullptr;  // the analysed matrix's arrays (read by factorize)

@@ -511,6 +511,7 @@ RunResult run_implicit(const M& model, const RunSettings& settings, const Implic
   result.implicit.linear_iterations = integrator.linear_iterations_total();
   result.implicit.direct_solver = integrator.direct_solver();
   result.implicit.supernodal = integrator.supernodal();
+  result.implicit.single_solves = integrator.single_solves();
   result.implicit.mass_solver = integrator.mass_solver();
   result.implicit.mass_iterations = integrator.mass_iterations();
   result.implicit.factorizations = integrator.factorizations();

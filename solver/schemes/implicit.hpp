@@ -58,6 +58,7 @@ class ImplicitIntegratorT {
   long linear_iterations_total() const { return system_.cg_iterations(); }
   bool direct_solver() const { return system_.has_factor(); }  // a factor is (or may be) used
   bool supernodal() const { return system_.supernodal(); }     // that factor is supernodal
+  bool single_solves() const { return system_.single_solves(); }  // ... solved in single precision
   bool mass_solver() const { return system_.mass_run(); }  // steps start with the mass iteration
   long mass_iterations() const { return system_.mass_iterations(); }
   long factorizations() const { return system_.factorizations(); }

@@ -38,6 +38,15 @@ enum class LinearSolverKind {
 // docs/implicit.md). With pcg, a solve that fails (indefinite matrix of a far-off iterate)
 // switches the run to direct.
 
+// The precision of the direct solver's solves (docs/implicit.md, "Single-precision solves"); the
+// factorization is always double.
+enum class FactorPrecision {
+  double_,  // CHOLMOD's solves with its double factor
+  single,   // solves with a single-precision copy of L (solver/linear/single_factor.hpp): half
+            // the solve time on large supernodal factors; momentum kept to the Newton tolerance
+            // rather than to round-off
+};
+
 struct ImplicitSettings {
   double theta = 0.5;               // [0.5, 1]; 0.5 = trapezoidal displacement update
   double xi = 0.5;                  // [0.5, 1]; 0.5 = trapezoidal force average
@@ -63,6 +72,7 @@ struct ImplicitSettings {
   double mass_contraction = 0.6;  // [0, 1)
   int mass_iterations = 15;       // >= 1
   int mass_anderson_depth = 2;     // 0 .. AndersonMixer::kMaxDepth; 0: the plain iteration
+  FactorPrecision factor_precision = FactorPrecision::double_;
 };
 
 // The mass iteration's estimated contraction per Newton iteration at step dt on a model whose
@@ -124,6 +134,7 @@ class ImplicitSystem {
   bool direct() const { return direct_ && !mass_now_; }  // this iteration solves with the factor
   bool has_factor() const { return direct_; }             // the direct solver is set up (analysed)
   bool supernodal() const { return direct_ && factor_.supernodal(); }  // its factor's method
+  bool single_solves() const { return direct_ && factor_.single(); }   // ... and its solves' precision
   bool mass_iteration() const { return mass_now_; }      // this iteration solves with M
   bool mass_run() const { return mass_run_; }                // the run starts its steps with M
   // The identity of the matrix the solves use, for the contact problem's kept columns: 0 for

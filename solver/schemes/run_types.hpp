@@ -221,6 +221,7 @@ struct RunImplicit {
   bool direct_solver = false;      // CHOLMOD Cholesky (true) or PCG (false)
   bool mass_solver = false;        // steps start with the mass iteration (then the factor)
   bool supernodal = false;         // direct solver: the factor is supernodal (else simplicial)
+  bool single_solves = false;      // direct solver: solves with a single-precision copy of L
   long mass_iterations = 0;        // Newton iterations solved with the lumped mass matrix
   long factorizations = 0;         // direct solver: numeric factorizations of A
   int refactor_iterations = 0;     // direct solver: the refactorization cap in effect (0: none)

@@ -1,7 +1,8 @@
 // The implicit scheme's direct solver (solver/linear/cholmod_factor.hpp, CHOLMOD): solutions of
 // iteration matrices against a dense factorization with both methods, the fill against the
-// dense triangle, the indefinite-matrix report and a clean refactorization after it, and no
-// allocation by factorize() and solve() after analyze().
+// dense triangle, the indefinite-matrix report and a clean refactorization after it, the
+// single-precision copy of L (single_factor.hpp), and no allocation by factorize() and solve()
+// after analyze().
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -73,6 +74,56 @@ TEST(CholmodFactor, SolvesIterationMatrices) {
   }
 }
 
+// The single-precision copy of L (single_factor.hpp): its solution is the double factor's to
+// float round-off times the conditioning (the matrices here have condition numbers up to about
+// 1e4), the block solve gives each column's single solve, and turning it off gives CHOLMOD's
+// double solution again, bit for bit. After a refactorization the copy follows the new factor.
+void expect_single_solves(const RowMajor& a, Method method, const char* what) {
+  SCOPED_TRACE(std::string(what) + ", " + method_name(method));
+  CholmodFactor f;
+  f.analyze(a, method);
+  ASSERT_TRUE(f.factorize(a.valuePtr()));
+  const int n = static_cast<int>(a.rows());
+  const Eigen::VectorXd b = rhs(n);
+  Eigen::VectorXd exact, x;
+  f.solve(b, exact);
+  f.use_single(true);
+  ASSERT_TRUE(f.single());
+  f.solve(b, x);
+  const double difference = (x - exact).norm() / exact.norm();
+  EXPECT_LE(difference, 1e-4);
+  EXPECT_GT(difference, 0.0);  // the copy is used, and is not exact
+  // Four right-hand sides in one sweep: each column as its own solve.
+  Eigen::MatrixXd bb(n, 4), xb(n, 4);
+  for (int c = 0; c < 4; ++c) bb.col(c) = b * (c + 1.0) + Eigen::VectorXd::LinSpaced(n, 0.0, c);
+  for (int ncol = 1; ncol <= 4; ++ncol) {
+    f.solve_block(bb.data(), xb.data(), ncol);
+    for (int c = 0; c < ncol; ++c) {
+      Eigen::VectorXd one;
+      f.solve(bb.col(c), one);
+      EXPECT_LE((xb.col(c) - one).norm(), 1e-14 * one.norm()) << ncol << " columns, column " << c;
+    }
+  }
+  // A refactorization with other values: the copy is of the new factor.
+  std::vector<double> twice(a.valuePtr(), a.valuePtr() + a.nonZeros());
+  for (double& v : twice) v *= 2.0;
+  ASSERT_TRUE(f.factorize(twice.data()));
+  f.solve(b, x);
+  EXPECT_LE((2.0 * x - exact).norm(), 1e-4 * exact.norm());
+  ASSERT_TRUE(f.factorize(a.valuePtr()));
+  f.use_single(false);
+  f.solve(b, x);
+  EXPECT_EQ((x - exact).norm(), 0.0);
+}
+
+TEST(CholmodFactor, SinglePrecisionCopySolves) {
+  for (Method m : {Method::supernodal, Method::simplicial}) {
+    expect_single_solves(iteration_matrix(ElementKind::q4_full, 1e-8), m, "q4 2x2, stiffness-dominated");
+    expect_single_solves(iteration_matrix(ElementKind::t3, 1e-8), m, "t3, stiffness-dominated");
+    expect_single_solves(iteration_matrix(ElementKind::q4_full, 1e-8, 40, 12), m, "q4 2x2, 40 x 12 cells");
+  }
+}
+
 TEST(CholmodFactor, FillIsReducedByTheOrdering) {
   // A long strip numbered along its length has a wide band; AMD keeps L far below the dense
   // lower triangle.
@@ -133,6 +184,7 @@ TEST(CholmodFactor, FactorizeAndSolveDoNotAllocate) {
     CholmodFactor f, g;
     f.analyze(a, m);
     g.analyze(a2, m);
+    g.use_single(true);  // its copy is made again by every factorization
     const Eigen::VectorXd b = rhs(static_cast<int>(a.rows())), b2 = rhs(static_cast<int>(a2.rows()));
     Eigen::VectorXd x(a.rows()), x2(a2.rows());
     std::vector<double> zero(static_cast<std::size_t>(a.nonZeros()), 0.0);

@@ -323,6 +323,7 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
     LinearSolverKind solver;
     double refactor_contraction;
     const char* name;
+    FactorPrecision precision = FactorPrecision::double_;
   };
   const Material3 m = NeoHookean3::make(1e7, 0.3, 1000.0);
   for (test3::Kind kind : {test3::Kind::hex8, test3::Kind::hex8_viscous, test3::Kind::tet4}) {
@@ -331,7 +332,9 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
     const Model<3> model = build_model({b}, Vec3::Zero());
     const double low = model.ref.row(1).minCoeff();
     for (const Config& config : {Config{LinearSolverKind::pcg, 0.5, "pcg"}, Config{LinearSolverKind::direct, 0.5, "direct"},
-                                 Config{LinearSolverKind::direct, 0.0, "direct, full Newton"}})
+                                 Config{LinearSolverKind::direct, 0.0, "direct, full Newton"},
+                                 Config{LinearSolverKind::direct, 0.5, "direct, single-precision solves",
+                                        FactorPrecision::single}})
       for (double mu : {0.0, 0.3}) {
         SCOPED_TRACE(std::string(test3::kind_name(kind)) + ", " + config.name + ", mu " + std::to_string(mu));
         RunSettings s;
@@ -341,6 +344,7 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
         ImplicitSettings im;
         im.linear_solver = config.solver;
         im.refactor_contraction = config.refactor_contraction;
+        im.factor_precision = config.precision;
         ImplicitIntegratorT<Model<3>> integrator(model, s, im);
         for (int n = 0; n < 3; ++n) ASSERT_TRUE(integrator.step(false)) << integrator.failure();  // warm up
         const long before = g_allocations.load();
