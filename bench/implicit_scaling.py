@@ -4,7 +4,7 @@
 
     bench/implicit_scaling.py [--ricochet build/ricochet] [--steps 30] [--dt 1e-5]
                               [--meshes2 M1,M2,M2x2,M2x4] [--meshes3 M1x2,M1x4,M2x2]
-                              [--out DIR]
+                              [--factor-precision double|single] [--out DIR]
 
 Runs, one after the other on one thread, the oblique plate (cases/oblique_plate.toml) on each 2D
 mesh and the oblique block (cases/three_d/oblique_block.toml) on each 3D mesh, for `--steps`
@@ -13,7 +13,8 @@ time at its automatic step (0.9 of the critical one), fields off, and prints one
 table: cells, DOFs, per-step CPU time of each scheme, the implicit scheme's phases
 (summary.json implicit.phase_seconds, wall time per step), Newton iterations and
 factorizations per step, the ratio of the two runs' CPU times over the same simulated time,
-and each run's peak resident memory. Each run is a process of its own, so its peak memory is its own. Timings move
+and each run's peak resident memory. `--factor-precision` is the implicit runs'
+implicit.factor_precision (docs/implicit.md, "Single-precision solves"). Each run is a process of its own, so its peak memory is its own. Timings move
 with the machine's load: compare the rows of one table, measured together.
 """
 import argparse
@@ -26,10 +27,12 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 
-def run(ricochet, case, mesh, scheme, steps, dt, out):
+def run(ricochet, case, mesh, scheme, steps, dt, out, precision="double"):
     """summary.json of one run (raises on a failed run)."""
     args = [str(ricochet), "run", str(case), "--set", f"mesh={mesh}", "--set", f"scheme={scheme}",
             "--set", "output.fields=[]", "--threads", "1", "--quiet", "--out", str(out)]
+    if scheme == "implicit":
+        args += ["--set", f'implicit.factor_precision="{precision}"']
     args += ["--set", f"time.dt={dt!r}" if scheme == "implicit" else "time.dt=auto", "--set", f"time.end={steps * dt!r}"]
     done = subprocess.run(args, capture_output=True, text=True)
     if done.returncode != 0:
@@ -60,6 +63,7 @@ def main():
     p.add_argument("--dt", type=float, default=1e-5)
     p.add_argument("--meshes2", default="M1,M2,M2x2,M2x4")
     p.add_argument("--meshes3", default="M1x2,M1x4,M2x2")
+    p.add_argument("--factor-precision", choices=["double", "single"], default="double")
     p.add_argument("--out", default=None, help="keep the runs' folders here (default: a temporary folder)")
     a = p.parse_args()
     out = pathlib.Path(a.out) if a.out else pathlib.Path(tempfile.mkdtemp(prefix="implicit_scaling_"))
@@ -75,7 +79,8 @@ def main():
     for dim, case, meshes in cases:
         for mesh in meshes:
             try:
-                imp = run(a.ricochet, case, mesh, "implicit", a.steps, a.dt, out / f"{dim}d_{mesh}_implicit")
+                imp = run(a.ricochet, case, mesh, "implicit", a.steps, a.dt, out / f"{dim}d_{mesh}_implicit",
+                          a.factor_precision)
                 semi = run(a.ricochet, case, mesh, "semi_explicit", a.steps, a.dt, out / f"{dim}d_{mesh}_semi")
             except RuntimeError as e:
                 print(f"implicit_scaling: {e}", file=sys.stderr)

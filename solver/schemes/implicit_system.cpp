@@ -48,8 +48,9 @@ void ImplicitSystem::use_direct() {
   direct_ = true;
   factor_.analyze(system_.matrix, CholmodFactor::Method::automatic);
   // Single-precision solves when the case asks for them (docs/implicit.md, "Single-precision
-  // solves"): on the oblique plate's M2x2 and M2x4 supernodal factors half and two thirds of the
-  // double solve's time; not the default, since they keep momentum only to the Newton tolerance.
+  // solves"): half the double solves' time on the oblique plate's M2x2, none on M2x4 or the 3D
+  // M2x2 in whole runs, slower on M2; not the default, and momentum is kept only to the Newton
+  // tolerance with them.
   factor_.use_single(set_.factor_precision == FactorPrecision::single);
   // Automatic: no cap of its own (the step's max_newton_iterations); the contraction, line-search
   // and run-out rules of end_iteration() decide.

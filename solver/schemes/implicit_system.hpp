@@ -43,8 +43,8 @@ enum class LinearSolverKind {
 enum class FactorPrecision {
   double_,  // CHOLMOD's solves with its double factor
   single,   // solves with a single-precision copy of L (solver/linear/single_factor.hpp): half
-            // the solve time on large supernodal factors; momentum kept to the Newton tolerance
-            // rather than to round-off
+            // the solve time where the float copy fits the cache and the double factor does not
+            // (M2x2); momentum kept to the Newton tolerance rather than to round-off
 };
 
 struct ImplicitSettings {
