@@ -336,6 +336,9 @@ TEST(NoAllocation, ImplicitSteps3DoNotAllocate) {
                                  Config{LinearSolverKind::direct, 0.5, "direct, single-precision solves",
                                         FactorPrecision::single}})
       for (double mu : {0.0, 0.3}) {
+        // The single-precision copy's solves are the same for every element kind: one is enough
+        // (this test is among the longest under the sanitizers).
+        if (config.precision == FactorPrecision::single && kind != test3::Kind::hex8) continue;
         SCOPED_TRACE(std::string(test3::kind_name(kind)) + ", " + config.name + ", mu " + std::to_string(mu));
         RunSettings s;
         s.dt = 2e-5;
