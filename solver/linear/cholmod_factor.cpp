@@ -339,6 +339,13 @@ void CholmodFactor::solve_block(const double* b, double* x, int ncol) {
 }
 
 double CholmodFactor::factor_nonzeros() const { return common_->lnz; }
+double CholmodFactor::solve_bytes() const {
+  if (use_single_) return single_.bytes();
+  if (factor_ == nullptr) return 0.0;
+  if (factor_->is_super)
+    return static_cast<double>(factor_->xsize) * sizeof(double) + static_cast<double>(factor_->ssize) * sizeof(int);
+  return static_cast<double>(factor_->nzmax) * (sizeof(double) + sizeof(int));
+}
 bool CholmodFactor::supernodal() const { return factor_ != nullptr && factor_->is_super; }
 
 bool CholmodFactor::optimized_blas() {

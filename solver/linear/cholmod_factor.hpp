@@ -91,7 +91,10 @@ class CholmodFactor {
   // factorization itself is always double. Allocates when turned on.
   void use_single(bool on);
   bool single() const { return use_single_; }
-  double single_bytes() const { return single_.bytes(); }  // the copy's storage
+  // The storage a solve reads [bytes]: L's values and row indices, of the single-precision copy
+  // when it is used, else of CHOLMOD's factor (supernodal: its blocks and one row list per
+  // supernode; simplicial: a row index per entry).
+  double solve_bytes() const;
 
   int size() const { return n_; }
   bool analyzed() const { return factor_ != nullptr; }
