@@ -3,5 +3,6 @@
 #include "solver/forces/internal_forces_impl.hpp"
 
 namespace ricochet {
+RICOCHET_FORCE_PASS_EXTERN(2)
 RICOCHET_FORCE_PASSES(2)
 }  // namespace ricochet

@@ -3,5 +3,6 @@
 #include "solver/forces/internal_forces_impl.hpp"
 
 namespace ricochet {
+RICOCHET_FORCE_PASS_EXTERN(3)
 RICOCHET_FORCE_PASSES(3)
 }  // namespace ricochet

@@ -3,9 +3,13 @@
 // the including unit includes first: the kernels, how a cell's forces go out (ForceOutput<D>:
 // added into f, or stored for the threaded pass's gather) and where a point's F comes from in a
 // stress pass (for_each_cell_points): element_kernels2.hpp, element_kernels3.hpp. Each
-// dimension is instantiated in a unit of its own (internal_forces2.cpp, internal_forces3.cpp,
-// RICOCHET_FORCE_PASSES), so that the two sets of kernels, the heaviest sources of the
-// solver, compile in parallel.
+// dimension is instantiated in units of its own, so that the kernels, the heaviest sources of
+// the solver, compile in parallel: internal_forces2.cpp and internal_forces3.cpp hold the passes
+// (RICOCHET_FORCE_PASSES), and the force pass's kernels are split by stress measure over
+// force_pass{2,3}_{plain,pk2,kirchhoff,cauchy}.cpp (RICOCHET_FORCE_PASS_VARIANTS), which
+// RICOCHET_FORCE_PASS_EXTERN keeps the passes' unit from instantiating again. As one unit the 3D
+// kernels took 200 s of a Release build and 427 s under the sanitizers, the build's longest
+// path on two cores.
 #pragma once
 
 #include "solver/forces/internal_forces.hpp"
@@ -24,7 +28,9 @@
 #include "solver/materials/stress.hpp"
 
 namespace ricochet {
-namespace {
+// Named, not anonymous: the units of RICOCHET_FORCE_PASS_VARIANTS instantiate all_blocks for
+// the passes' unit.
+namespace force_passes {
 
 // The von Mises functions under one name: the 2D ones take the material (its plane mode decides
 // the out-of-plane stress), the 3D ones do not need it.
@@ -243,7 +249,7 @@ void for_each_cell_stress(const Model<D>& model, const double* u, Point&& point,
 }
 
 // The point value with only `measure`'s entry filled (the others 0): one measure's work.
-auto one_measure(StressMeasure measure) {
+inline auto one_measure(StressMeasure measure) {
   return [measure](const auto& mat, const auto& F, const auto& P, double det_f) {
     VonMises2 v{0.0, 0.0, 0.0};
     v[static_cast<int>(measure)] = ratio(mat, F, P, det_f, measure).value();
@@ -251,11 +257,12 @@ auto one_measure(StressMeasure measure) {
   };
 }
 
-const auto all_measures = [](const auto& mat, const auto& F, const auto& P, double det_f) {
+inline const auto all_measures = [](const auto& mat, const auto& F, const auto& P, double det_f) {
   return squared(mat, F, P, det_f);
 };
 
-}  // namespace
+}  // namespace force_passes
+using namespace force_passes;
 
 template <int D>
 ForceTotals internal_forces(const Model<D>& model, const double* u, const double* v, double* f_int, bool with_energy,
@@ -413,3 +420,25 @@ VonMises2 von_mises_maxima(const Model<D>& model, const double* u) {
   template void cell_tensors(const Model<D>&, const double*, double*, double*);                                     \
   template StressPeaks stress_peaks(const Model<D>&, const double*, const StressTracking&);                          \
   template VonMises2 von_mises_maxima(const Model<D>&, const double*);
+
+// The force pass's kernels for one stress variant of dimension D (kStress as in all_blocks: 0
+// for no stresses, else 1 + the measure), in namespace ricochet: with energies or without, and
+// a sample pass's where there are stresses.
+#define RICOCHET_FORCE_PASS_ALL_BLOCKS(PREFIX, D, kEnergy, kStress, kSample)                                      \
+  PREFIX template void force_passes::all_blocks<kEnergy, kStress, kSample, D>(                                     \
+      const Model<D>&, const double*, const double*, double*, const StressTracking*, ForceTotals&, ForceScratch*);
+#define RICOCHET_FORCE_PASS_VARIANT_SET(PREFIX, D, kStress)                                                       \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(PREFIX, D, false, kStress, false)                                                \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(PREFIX, D, true, kStress, false)                                                 \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(PREFIX, D, true, kStress, true)
+#define RICOCHET_FORCE_PASS_VARIANTS(D, kStress) RICOCHET_FORCE_PASS_VARIANT_SET(, D, kStress)
+#define RICOCHET_FORCE_PASS_PLAIN(D)                                                                              \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(, D, false, 0, false)                                                            \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(, D, true, 0, false)
+// In the passes' unit: every variant is instantiated in its own unit.
+#define RICOCHET_FORCE_PASS_EXTERN(D)                                                                             \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(extern, D, false, 0, false)                                                      \
+  RICOCHET_FORCE_PASS_ALL_BLOCKS(extern, D, true, 0, false)                                                       \
+  RICOCHET_FORCE_PASS_VARIANT_SET(extern, D, 1 + static_cast<int>(StressMeasure::pk2))                            \
+  RICOCHET_FORCE_PASS_VARIANT_SET(extern, D, 1 + static_cast<int>(StressMeasure::kirchhoff))                      \
+  RICOCHET_FORCE_PASS_VARIANT_SET(extern, D, 1 + static_cast<int>(StressMeasure::cauchy))
