@@ -96,6 +96,10 @@ class CondensedContact {
     unit_.setZero(num_dofs, kMaxBlock);
     unit_response_.setZero(num_dofs, kMaxBlock);
     for (Eigen::VectorXd* v : {&impulse_, &y_, &rhs_}) v->setZero(num_dofs);
+    impulse_mark_.assign(num_dofs / D, 0);
+    impulse_nodes_.reserve(num_dofs / D);
+    y_nodes_.reserve(num_dofs / D);
+    y_dense_ = false;
   }
 
   // Candidate k's local problem for this iterate: x = x_free + w r (w: the diagonal estimate of
@@ -108,18 +112,27 @@ class CondensedContact {
   // impulse = H^T R over every candidate (the last step's reactions, in the frames and on the
   // stencils they were solved in), or over the active ones.
   void impulse_of_all(const ContactSetT<D>& cs) {
-    impulse_.setZero();
+    zero_impulse();
     for (int k = 0; k < static_cast<int>(cs.candidates.size()); ++k) add_impulse(cs, k);
   }
   void impulse_of_active(const ContactSetT<D>& cs) {
-    impulse_.setZero();
+    zero_impulse();
     for (const int k : cs.active) add_impulse(cs, k);
   }
   // No active contact: R = 0.
   void clear() {
-    impulse_.setZero();
-    y_.setZero();
+    zero_impulse();
+    zero_response();
     sweeps_ = 0;
+  }
+  // x += response(), over the nodes it is not zero at when A is diagonal (exact()'s
+  // diagonal_inverse).
+  void add_response(Eigen::VectorXd& x) const {
+    if (y_dense_) {
+      x += y_;
+      return;
+    }
+    for (int j : y_nodes_) x.template segment<D>(D * j) += y_.template segment<D>(D * j);
   }
 
   // Uzawa sweeps, at most max_sweeps: x(R) exact through one solve of A per sweep,
@@ -131,6 +144,7 @@ class CondensedContact {
     for (sweeps_ = 1; sweeps_ <= max_sweeps; ++sweeps_) {
       impulse_of_active(cs);
       rhs_ = dt * impulse_;
+      y_dense_ = true;
       if (!solve(rhs_, y_)) return false;
       double change = 0.0, size = 0.0;
       for (int k : cs.active) {
@@ -155,13 +169,14 @@ class CondensedContact {
 
   // The exact W and Gauss-Seidel, at most max_sweeps. `solve_block(b, x, ncol)`: x = A^-1 b for
   // ncol (1 to 4) columns. `factor_id`: the identity of the factor the solves use (G computed with
-  // it is reused), or -1 when they have no fixed factor (CG: G is computed anew). `cheap_solve`:
-  // a solve costs less than summing the response from kept columns (the mass iteration's
-  // diagonal M), so the response is always one solve. False only when a linear solve fails;
-  // whether Gauss-Seidel converged is converged().
+  // it is reused), or -1 when they have no fixed factor (CG: G is computed anew).
+  // `diagonal_inverse`: A is diagonal (the mass iteration's M) and this is 1 / its entries; the
+  // response is then the impulse's nodes' entries alone, (dt H^T R) / A, the same numbers as a
+  // solve, without a pass over every DOF. False only when a linear solve fails; whether
+  // Gauss-Seidel converged is converged().
   template <class Solve, class SolveBlock>
   bool exact(ContactSetT<D>& cs, double c, double dt, int max_sweeps, double tol, const Solve& solve,
-             const SolveBlock& solve_block, long factor_id, bool cheap_solve = false) {
+             const SolveBlock& solve_block, long factor_id, const Eigen::VectorXd* diagonal_inverse = nullptr) {
     const int m = dirs_ * static_cast<int>(cs.active.size());
     ++exact_solves_;
     converged_ = false;
@@ -213,9 +228,17 @@ class CondensedContact {
     }
     sweeps_ = std::min(sweeps_, max_sweeps);
     impulse_of_active(cs);
-    if (!cheap_solve && response_from_pool(cs, dt)) return true;
+    if (diagonal_inverse) {
+      zero_response();
+      y_nodes_.assign(impulse_nodes_.begin(), impulse_nodes_.end());
+      for (int j : y_nodes_)
+        for (int x = 0; x < D; ++x) y_[D * j + x] = (dt * impulse_[D * j + x]) * (*diagonal_inverse)[D * j + x];
+      return true;
+    }
+    if (response_from_pool(cs, dt)) return true;
     rhs_ = dt * impulse_;
     y_.setZero();
+    y_dense_ = true;
     return solve(rhs_, y_);
   }
 
@@ -230,7 +253,31 @@ class CondensedContact {
   void add_impulse(const ContactSetT<D>& cs, int k) {
     const Vec r = ContactFrame<D>(cs.normal[k]).global(cs.reaction[k]);
     const Stencil& st = cs.stencil[k];
-    for (int j = 0; j < st.count; ++j) impulse_.template segment<D>(D * st.node[j]) += st.coef[j] * r;
+    for (int j = 0; j < st.count; ++j) {
+      const int node = st.node[j];
+      impulse_.template segment<D>(D * node) += st.coef[j] * r;
+      if (!impulse_mark_[node]) {
+        impulse_mark_[node] = 1;
+        impulse_nodes_.push_back(node);
+      }
+    }
+  }
+  // The impulse and the response back to zero, over the entries that were set.
+  void zero_impulse() {
+    for (int j : impulse_nodes_) {
+      impulse_.template segment<D>(D * j).setZero();
+      impulse_mark_[j] = 0;
+    }
+    impulse_nodes_.clear();
+  }
+  void zero_response() {
+    if (y_dense_) {
+      y_.setZero();
+      y_dense_ = false;
+    } else {
+      for (int j : y_nodes_) y_.template segment<D>(D * j).setZero();
+    }
+    y_nodes_.clear();
   }
 
   // (n . y, t . y) of a contact's stencil: sum_j coef_j y_j projected on its frame.
@@ -288,9 +335,22 @@ class CondensedContact {
         }
       }
     }
-    y_.setZero();
+    // Four columns a pass over y (the sum is memory-bound: on M2x2 a column is 214 kB, and one
+    // column a pass read and wrote y once per column).
+    y_dense_ = true;
+    const int count = static_cast<int>(touched_.size());
+    auto col = [&](int t) { return pool_.col(pool_index_[touched_[t]]); };
+    auto w = [&](int t) { return slot_weight_[touched_[t]]; };
+    int t = 0;
+    if (count < 4) y_.setZero();
+    for (; t + 4 <= count; t += 4) {
+      if (t == 0)
+        y_.noalias() = w(0) * col(0) + w(1) * col(1) + w(2) * col(2) + w(3) * col(3);
+      else
+        y_.noalias() += w(t) * col(t) + w(t + 1) * col(t + 1) + w(t + 2) * col(t + 2) + w(t + 3) * col(t + 3);
+    }
+    for (; t < count; ++t) y_.noalias() += w(t) * col(t);
     for (int slot : touched_) {
-      y_.noalias() += slot_weight_[slot] * pool_.col(pool_index_[slot]);
       slot_weight_[slot] = 0.0;
       touched_flag_[slot] = 0;
     }
@@ -430,6 +490,13 @@ class CondensedContact {
   std::vector<unsigned char> touched_flag_;
   std::array<Vec, std::tuple_size_v<decltype(Stencil::node)>> coord_a_;  // row contact's coordinates per stencil node
   Eigen::VectorXd impulse_, y_, rhs_;
+  // The nodes impulse_ is not zero at (marked in impulse_mark_), so that it is emptied without a
+  // pass over every DOF; y_dense_: y_ came from a solve or the pool (else it is zero outside
+  // y_nodes_: the diagonal response).
+  std::vector<unsigned char> impulse_mark_;
+  std::vector<int> impulse_nodes_;
+  std::vector<int> y_nodes_;  // the nodes the diagonal response is not zero at
+  bool y_dense_ = false;
   int sweeps_ = 0;
   bool converged_ = true;
   long exact_solves_ = 0;

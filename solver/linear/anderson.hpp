@@ -37,17 +37,19 @@ class AndersonMixer {
     if (depth_ == 0) return;
     if (has_prev_) {
       // The new differences, and their products with the kept ones (gram_): the older
-      // columns' products do not change, so each iteration computes count_ + 1 of them.
+      // columns' products do not change, so each iteration computes count_ + 1 of them. The
+      // differences and the copies of x and f are one pass each.
       const int k = next_;
-      dx_.col(k) = x - x_prev_;
-      df_.col(k) = f - f_prev_;
+      difference_and_copy(x, x_prev_, dx_.col(k).data());
+      difference_and_copy(f, f_prev_, df_.col(k).data());
       next_ = (next_ + 1) % depth_;
       if (count_ < depth_) ++count_;
       for (int j = 0; j < count_; ++j) gram_(k, j) = gram_(j, k) = df_.col(j).dot(df_.col(k));
       norm2_[k] = df_.col(k).squaredNorm();
+    } else {
+      x_prev_ = x;
+      f_prev_ = f;
     }
-    x_prev_ = x;
-    f_prev_ = f;
     has_prev_ = true;
     if (count_ == 0) return;
     // gamma from the normal equations dF^T dF gamma = dF^T f, scaled to a unit diagonal and
@@ -72,10 +74,26 @@ class AndersonMixer {
       reset();
       return;
     }
-    for (int i = 0; i < count_; ++i) f -= gamma[i] * (dx_.col(i) + df_.col(i));
+    // f - gamma_0 (dx_0 + df_0) - gamma_1 (dx_1 + df_1) - ..., left to right as one term a
+    // pass would, two terms a pass.
+    int i = 0;
+    for (; i + 2 <= count_; i += 2)
+      f = (f - gamma[i] * (dx_.col(i) + df_.col(i))) - gamma[i + 1] * (dx_.col(i + 1) + df_.col(i + 1));
+    if (i < count_) f -= gamma[i] * (dx_.col(i) + df_.col(i));
   }
 
  private:
+  // out = a - prev, then prev = a, in one pass.
+  static void difference_and_copy(const Eigen::VectorXd& a, Eigen::VectorXd& prev, double* out) {
+    const long n = a.size();
+    const double* pa = a.data();
+    double* pp = prev.data();
+    for (long i = 0; i < n; ++i) {
+      out[i] = pa[i] - pp[i];
+      pp[i] = pa[i];
+    }
+  }
+
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDepth, kMaxDepth>;
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDepth, 1>;
   int depth_ = 0;

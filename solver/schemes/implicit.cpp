@@ -110,22 +110,53 @@ double ImplicitIntegratorT<M>::residual() {
   last_stress_ = fused && fused_stress_ != nullptr;
   s_.forces = internal_forces(model_, u1_.data(), v1_.data(), f1_.data(), last_energy_,
                               last_stress_ ? fused_stress_ : nullptr);
-  g_ = model_.mass.cwiseProduct(v1_ - v0_) + dt * (xi * f1_ + (1.0 - xi) * f0_ - s_.f_ext) - dt * condensed_.impulse();
+  // G and the largest entries of M v1, f1 and the impulse in one pass over the DOFs, without
+  // reading the vectors again for each norm.
+  const Eigen::VectorXd& impulse = condensed_.impulse();
+  const double *m = model_.mass.data(), *v1 = v1_.data(), *v0 = v0_.data(), *f1 = f1_.data(), *f0 = f0_.data(),
+               *fe = s_.f_ext.data(), *imp = impulse.data();
+  double* g = g_.data();
+  // Four entries at a time (Eigen's packets, as the expressions were), the rest one by one.
+  using A4 = Eigen::Array4d;
+  A4 mv4 = A4::Zero(), f4 = A4::Zero(), imp4 = A4::Zero(), g4 = A4::Zero(), probe4 = A4::Zero();
+  const long n = g_.size(), n4 = n - n % 4;
+  const double c0 = 1.0 - xi;
+  for (long i = 0; i < n4; i += 4) {
+    const A4 mi = A4::Map(m + i), v1i = A4::Map(v1 + i), f1i = A4::Map(f1 + i), impi = A4::Map(imp + i);
+    const A4 gi = mi * (v1i - A4::Map(v0 + i)) + dt * (xi * f1i + c0 * A4::Map(f0 + i) - A4::Map(fe + i)) - dt * impi;
+    A4::Map(g + i) = gi;
+    mv4 = mv4.max((mi * v1i).abs());
+    f4 = f4.max(f1i.abs());
+    imp4 = imp4.max(impi.abs());
+    g4 = g4.max(gi.abs());
+    probe4 += 0.0 * gi;  // NaN if an entry is not finite (max() could drop a NaN)
+  }
+  double mv_max = mv4.maxCoeff(), f_max = f4.maxCoeff(), imp_max = imp4.maxCoeff(), g_max = g4.maxCoeff();
+  double nan_probe = probe4.sum();
+  for (long i = n4; i < n; ++i) {
+    const double gi = m[i] * (v1[i] - v0[i]) + dt * (xi * f1[i] + c0 * f0[i] - fe[i]) - dt * imp[i];
+    g[i] = gi;
+    mv_max = std::max(mv_max, std::abs(m[i] * v1[i]));
+    f_max = std::max(f_max, std::abs(f1[i]));
+    imp_max = std::max(imp_max, std::abs(imp[i]));
+    g_max = std::max(g_max, std::abs(gi));
+    nan_probe += 0.0 * gi;
+  }
   // Nodal loads, xi-averaged like the other forces: dt [(1 - xi) F(t_n) + xi F(t_n+1)].
   for (const LoadedDof& l : s_.loads) g_[l.load.dof] -= dt * load_average(l.load);
   for (const auto& p : run_.prescribed) {
     prescribed_v_[p.dof] = g_[p.dof];  // the unconstrained residual: dt times the reaction
     g_[p.dof] = 0.0;
   }
+  if (!s_.loads.empty() || !run_.prescribed.empty()) g_max = g_.lpNorm<Eigen::Infinity>();
   // The momentum scale of the residual: the largest seen in the run, so the round-off floor of G
   // (e.g. the cancellation in E = (F^T F - I)/2) stays relative to the problem's scale when the
   // motion decays.
   // A body at rest has no momentum, and its internal forces balance gravity and the contact
   // reactions: then the floor is the internal forces' own round-off (internal_force_roundoff),
   // which the tolerance must not ask G to go below. The step's constant terms are step_scale_.
-  scale_ = std::max({scale_, step_scale_, model_.mass.cwiseProduct(v1_).template lpNorm<Eigen::Infinity>(),
-                     dt * f1_.lpNorm<Eigen::Infinity>(), dt * condensed_.impulse().template lpNorm<Eigen::Infinity>()});
-  return g_.lpNorm<Eigen::Infinity>() / scale_;
+  scale_ = std::max({scale_, step_scale_, mv_max, dt * f_max, dt * imp_max});
+  return (g_max + nan_probe) / scale_;
 }
 
 template <class M>
@@ -209,7 +240,7 @@ bool ImplicitIntegratorT<M>::solve_contact() {
   const double tol = run_.contact.tolerance;
   if (system_.matrix_id() < 0 && condensed_.uzawa(cs, c, dt, set_.uzawa_sweeps, tol, solve_a)) return true;
   if (!condensed_.exact(cs, c, dt, run_.contact.max_sweeps, tol, solve_a, solve_block, system_.matrix_id(),
-                        system_.mass_iteration()))
+                        system_.mass_iteration() ? &system_.inverse_diagonal() : nullptr))
     return false;
   if (!condensed_.converged()) step_unconverged_ = true;
   return true;
@@ -375,9 +406,16 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
     }
     system_.count_iteration();
     const double r_before = r;
-    rhs_ = -(g_ + dt * condensed_.impulse());  // the residual without the contact reactions
-    dv_free_.setZero();
-    if (!solve(rhs_, dv_free_)) return false;
+    // The update for the residual without the contact reactions. The mass iteration's solve is
+    // one multiplication by 1 / M, done in the same pass (the same numbers as system_.solve()).
+    if (system_.mass_iteration()) {
+      PhaseTimer timer(phases_.solve);
+      dv_free_ = (-(g_ + dt * condensed_.impulse())).cwiseProduct(system_.inverse_diagonal());
+    } else {
+      rhs_ = -(g_ + dt * condensed_.impulse());
+      dv_free_.setZero();
+      if (!solve(rhs_, dv_free_)) return false;
+    }
     if (!contact_.candidates.empty()) {
       // The contact problem's own time: its wall time less that of the solves it makes.
       const double solve_before = phases_.solve;
@@ -390,7 +428,7 @@ bool ImplicitIntegratorT<M>::newton(double r, int& sweeps) {
       phases_.contact -= phases_.solve - solve_before;
       if (!solved) return false;
       sweeps = std::max(sweeps, condensed_.sweeps());
-      dv_free_ += condensed_.response();
+      condensed_.add_response(dv_free_);
     }
     // The mass iteration's update, accelerated (AndersonMixer); a history from the factor's
     // iterations or a line search would mix two maps.
