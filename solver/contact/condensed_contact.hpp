@@ -335,22 +335,10 @@ class CondensedContact {
         }
       }
     }
-    // Four columns a pass over y (the sum is memory-bound: on M2x2 a column is 214 kB, and one
-    // column a pass read and wrote y once per column).
+    y_.setZero();
     y_dense_ = true;
-    const int count = static_cast<int>(touched_.size());
-    auto col = [&](int t) { return pool_.col(pool_index_[touched_[t]]); };
-    auto w = [&](int t) { return slot_weight_[touched_[t]]; };
-    int t = 0;
-    if (count < 4) y_.setZero();
-    for (; t + 4 <= count; t += 4) {
-      if (t == 0)
-        y_.noalias() = w(0) * col(0) + w(1) * col(1) + w(2) * col(2) + w(3) * col(3);
-      else
-        y_.noalias() += w(t) * col(t) + w(t + 1) * col(t + 1) + w(t + 2) * col(t + 2) + w(t + 3) * col(t + 3);
-    }
-    for (; t < count; ++t) y_.noalias() += w(t) * col(t);
     for (int slot : touched_) {
+      y_.noalias() += slot_weight_[slot] * pool_.col(pool_index_[slot]);
       slot_weight_[slot] = 0.0;
       touched_flag_[slot] = 0;
     }

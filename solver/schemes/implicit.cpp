@@ -116,7 +116,7 @@ double ImplicitIntegratorT<M>::residual() {
   const double *m = model_.mass.data(), *v1 = v1_.data(), *v0 = v0_.data(), *f1 = f1_.data(), *f0 = f0_.data(),
                *fe = s_.f_ext.data(), *imp = impulse.data();
   double* g = g_.data();
-  // Four entries at a time (Eigen's packets, as the expressions were), the rest one by one.
+  // Four entries at a time (Eigen's packets, as the expression was evaluated).
   using A4 = Eigen::Array4d;
   A4 mv4 = A4::Zero(), f4 = A4::Zero(), imp4 = A4::Zero(), g4 = A4::Zero(), probe4 = A4::Zero();
   const long n = g_.size(), n4 = n - n % 4;
@@ -133,14 +133,18 @@ double ImplicitIntegratorT<M>::residual() {
   }
   double mv_max = mv4.maxCoeff(), f_max = f4.maxCoeff(), imp_max = imp4.maxCoeff(), g_max = g4.maxCoeff();
   double nan_probe = probe4.sum();
-  for (long i = n4; i < n; ++i) {
-    const double gi = m[i] * (v1[i] - v0[i]) + dt * (xi * f1[i] + c0 * f0[i] - fe[i]) - dt * imp[i];
-    g[i] = gi;
-    mv_max = std::max(mv_max, std::abs(m[i] * v1[i]));
-    f_max = std::max(f_max, std::abs(f1[i]));
-    imp_max = std::max(imp_max, std::abs(imp[i]));
-    g_max = std::max(g_max, std::abs(gi));
-    nan_probe += 0.0 * gi;
+  // The last n % 4 entries by the vector expression itself, whose arithmetic there is Eigen's
+  // scalar path's (a loop written out here may contract differently into fused multiply-adds).
+  if (const long r = n - n4; r > 0) {
+    g_.tail(r) = model_.mass.tail(r).cwiseProduct(v1_.tail(r) - v0_.tail(r)) +
+                 dt * (xi * f1_.tail(r) + (1.0 - xi) * f0_.tail(r) - s_.f_ext.tail(r)) - dt * impulse.tail(r);
+    for (long i = n4; i < n; ++i) {
+      mv_max = std::max(mv_max, std::abs(m[i] * v1[i]));
+      f_max = std::max(f_max, std::abs(f1[i]));
+      imp_max = std::max(imp_max, std::abs(imp[i]));
+      g_max = std::max(g_max, std::abs(g[i]));
+      nan_probe += 0.0 * g[i];
+    }
   }
   // Nodal loads, xi-averaged like the other forces: dt [(1 - xi) F(t_n) + xi F(t_n+1)].
   for (const LoadedDof& l : s_.loads) g_[l.load.dof] -= dt * load_average(l.load);
